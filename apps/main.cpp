@@ -1,0 +1,44 @@
+// rackcat: an emulated EtherCAT modular I/O rack. See README.md.
+#include <cstdio>
+#include <map>
+#include <string>
+
+#include "apps/commands.hpp"
+
+namespace rackcat::apps {
+namespace {
+std::map<std::string, RegisterFn>& registry() {
+  static std::map<std::string, RegisterFn> r;
+  return r;
+}
+}  // namespace
+
+struct ExitRequest {
+  int code;
+};
+
+CommandRegistrar::CommandRegistrar(const char* name, RegisterFn fn) { registry()[name] = fn; }
+
+void register_all(CLI::App& app) {
+  for (const auto& [name, fn] : registry()) fn(app);
+}
+
+void exit_with(int code) { throw ExitRequest{code}; }
+
+}  // namespace rackcat::apps
+
+int main(int argc, char** argv) {
+  CLI::App app{"rackcat: an emulated EtherCAT modular I/O rack (Fusion.IO-style MDP device)"};
+  app.require_subcommand(1);
+  rackcat::apps::register_all(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // CLI11 uses exit code 0 for --help; usage errors are 2 as documented.
+    int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  } catch (const rackcat::apps::ExitRequest& r) {
+    return r.code;
+  }
+  return 0;
+}
