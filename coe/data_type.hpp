@@ -38,7 +38,9 @@ enum class DataType : uint16_t {
 };
 
 // True for indices 0x0800..0x0FFF: device-specific enumerations (ETG.1000.6 §5.6.7.4.4).
-constexpr bool is_enum_type(uint16_t index) { return index >= 0x0800 && index <= 0x0FFF; }
+constexpr bool is_enum_type(uint16_t index) {
+  return index >= 0x0800 && index <= 0x0FFF;
+}
 
 // Fixed bit size of a basic type; nullopt for strings (size given per entry).
 std::optional<uint16_t> fixed_bit_size(DataType t);

@@ -32,9 +32,9 @@ struct EnumValue {
   std::string name;
 };
 struct EnumType {
-  uint16_t index;      // 0x0800..
-  std::string name;    // "DT0800EN04"
-  uint16_t bit_size;   // 8 or 16 ...
+  uint16_t index;     // 0x0800..
+  std::string name;   // "DT0800EN04"
+  uint16_t bit_size;  // 8 or 16 ...
   std::vector<EnumValue> values;
 };
 
@@ -50,6 +50,13 @@ struct Entry {
   std::optional<int64_t> max;
   bool padding = false;  // a gap entry: counted in the layout, never addressed by SDO
   std::string unit;      // optional, for descriptions
+  // Paired limits (abort 0x06090036 "maximum value is less than minimum value"): when
+  // non-zero, this entry is the maximum of the pair and subindex `max_of` holds the minimum
+  // (a write below it aborts), or this entry is the minimum and `min_of` names the maximum.
+  uint8_t max_of = 0;
+  uint8_t min_of = 0;
+  // Unit type index for SDO Information entry descriptions (ETG.1000.6 §5.6.3.6.2), 0 = none.
+  uint16_t unit_type = 0;
 
   DataType type() const { return static_cast<DataType>(data_type); }
   uint16_t byte_length() const { return static_cast<uint16_t>((bit_length + 7) / 8); }
@@ -63,9 +70,11 @@ struct ObjectHooks {
   // Refresh the image before `subindex` (or, for complete access, all entries: subindex -1)
   // is read.
   std::function<void(Object&, int subindex)> before_read;
-  // Validate a write before it is committed: `data` is the new bytes for `subindex` (or the
-  // whole image from subindex 0/1 for complete access, subindex -1). Return AbortCode::None to
-  // accept. The state is the ESM state the write arrives in.
+  // Validate a write before it is committed: `data` is the new bytes for `subindex`
+  // (byte_length() bytes, a bit entry right-aligned in one byte), or for complete access
+  // (subindex -1) the whole candidate image, laid out exactly like image() from subindex 0,
+  // whether the master wrote from subindex 0 or 1. Return AbortCode::None to accept. The state
+  // is the ESM state the write arrives in.
   std::function<AbortCode(const Object&, int subindex, std::span<const uint8_t> data,
                           EsmState state)>
       validate_write;
@@ -86,10 +95,17 @@ class Object {
   // Add entries in subindex order. For ARRAY/RECORD add subindex 0 first (UNSIGNED8, 8 bits);
   // the builder places it in 16 bits as complete access requires. Bit offsets are assigned
   // automatically when `entry.bit_offset` is 0 and it is not the first entry; entries of 8
-  // bits or more start on a byte boundary unless `packed` (PDO-style BITn packing).
+  // bits or more start on a byte boundary unless set_packed(true) (PDO-style BITn packing,
+  // as ETG.2000 BitOffs of a packed record). An explicit bit_offset leaves a gap: gap bits
+  // read as 0 in a complete access and are ignored on write. Entries marked `padding` take
+  // their place in the layout but answer SDO access with "subindex does not exist".
+  // Throws std::logic_error on a subindex out of order or an overlapping explicit offset.
   Entry& add(Entry entry);
-  // Call once after the last add(): sizes the image and loads defaults.
+  // Call once after the last add(): sizes the image and loads defaults. add() after
+  // finalize() is allowed (finalize again).
   void finalize();
+  void set_packed(bool packed) { packed_ = packed; }
+  bool packed() const { return packed_; }
 
   const std::vector<Entry>& entries() const { return entries_; }
   const Entry* entry(uint8_t subindex) const;
@@ -97,13 +113,20 @@ class Object {
   uint8_t max_subindex() const;
   // For ARRAY/RECORD: the current value of subindex 0 (number of entries in use).
   uint8_t sub0() const;
+  // OR of all entries' access words (for SDO Information list types 2..5).
+  uint16_t combined_access() const { return combined_access_; }
+  // Bits of the complete-access image covering subindex 0 (or 1) up to subindex `last`
+  // (inclusive; entries above `last` excluded). Used for complete access lengths.
+  size_t ca_end_bit(uint8_t last) const;
 
   // The value image, complete-access layout.
   std::span<uint8_t> image() { return image_; }
   std::span<const uint8_t> image() const { return image_; }
   size_t bit_size() const { return image_.size() * 8; }
 
-  // Typed helpers for device code (little-endian, by subindex).
+  // Typed helpers for device code (little-endian, by subindex). bytes() is the entry's byte
+  // range inside the image: exact for byte-aligned entries; for a bit entry (BOOL/BITn) it is
+  // the byte holding it, so use get_u/set_u for those. Unknown subindex: empty span.
   std::span<uint8_t> bytes(uint8_t subindex);
   std::span<const uint8_t> bytes(uint8_t subindex) const;
   uint64_t get_u(uint8_t subindex) const;
@@ -123,17 +146,39 @@ class Object {
   uint16_t data_type_;
   std::vector<Entry> entries_;
   std::vector<uint8_t> image_;
+  bool packed_ = false;
+  uint16_t combined_access_ = 0;
+  uint16_t next_bit_ = 0;
 };
 
 class ObjectDictionary {
  public:
+  ObjectDictionary() = default;
+  ObjectDictionary(const ObjectDictionary& other);
+  ObjectDictionary& operator=(const ObjectDictionary& other);
+  ObjectDictionary(ObjectDictionary&&) = default;  // map nodes move with the index
+  ObjectDictionary& operator=(ObjectDictionary&&) = default;
+
   // Adds an object (call Object::finalize() first or let add() do it). Replaces nothing:
   // adding an index twice throws std::logic_error (a programming error at start-up).
+  // References returned stay valid for the dictionary's lifetime.
   Object& add(Object object);
   void add_enum(EnumType type);
+  // Removes an object (e.g. a module unplugged at start-up); false if absent.
+  bool remove(uint16_t index);
 
+  // O(log n) over a sorted flat index: the SDO request path's lookup.
   Object* find(uint16_t index);
   const Object* find(uint16_t index) const;
+  const EnumType* find_enum(uint16_t index) const;
+
+  // Position-based access in index order (0 .. size()-1), for resumable SDO Information
+  // lists; lower_bound gives the position of the first object with index >= `index`.
+  const Object& at(size_t position) const { return *sorted_[position]; }
+  Object& at(size_t position) { return *sorted_[position]; }
+  size_t lower_bound(uint16_t index) const;
+  // Largest object image in bytes (sizes the SDO server's transfer buffer).
+  size_t max_image_bytes() const;
 
   // Objects in index order (for SDO Information lists, the `od` command and the ESI).
   template <class F>
@@ -148,8 +193,12 @@ class ObjectDictionary {
   const std::map<uint16_t, EnumType>& enums() const { return enums_; }
 
  private:
-  std::map<uint16_t, Object> objects_;
+  void rebuild_index();
+
+  std::map<uint16_t, Object> objects_;  // node-based: Object& stays valid across add()
   std::map<uint16_t, EnumType> enums_;
+  std::vector<uint16_t> keys_;  // sorted indices, parallel to sorted_
+  std::vector<Object*> sorted_;
 };
 
 }  // namespace rackcat::coe

@@ -1,0 +1,216 @@
+// Object images and the dictionary's sorted index (ETG.1000.6 §5.6.7, §5.6.2.1.4 for the
+// complete-access layout the image follows).
+#include "coe/object_dictionary.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "coe/bits.hpp"
+
+namespace rackcat::coe {
+
+Object::Object(uint16_t index, ObjectCode code, std::string name, uint16_t data_type)
+    : index_(index), code_(code), name_(std::move(name)), data_type_(data_type) {}
+
+Entry& Object::add(Entry e) {
+  if (!entries_.empty() && e.subindex <= entries_.back().subindex)
+    throw std::logic_error("object " + std::to_string(index_) + ": subindex out of order");
+  if (e.bit_length == 0) {
+    if (auto bits = fixed_bit_size(e.type())) {
+      e.bit_length = *bits;
+    } else if (!e.default_value.empty()) {
+      e.bit_length = static_cast<uint16_t>(e.default_value.size() * 8);
+    } else {
+      throw std::logic_error("object " + std::to_string(index_) + ": entry without bit length");
+    }
+  }
+  // Subindex 0 of an ARRAY/RECORD takes 16 bits in complete access (ETG.1000.6 §5.6.2.1.4).
+  const bool sub0_slot = code_ != ObjectCode::Var && e.subindex == 0;
+  if (entries_.empty() || e.bit_offset == 0) {
+    uint16_t pos = entries_.empty() ? e.bit_offset : next_bit_;
+    if (!packed_ && e.bit_length >= 8 && (pos % 8) != 0)
+      pos = static_cast<uint16_t>(pos + 8 - pos % 8);
+    e.bit_offset = pos;
+  } else if (e.bit_offset < next_bit_) {
+    throw std::logic_error("object " + std::to_string(index_) + ": overlapping bit offset");
+  }
+  next_bit_ = static_cast<uint16_t>(e.bit_offset + (sub0_slot ? 16 : e.bit_length));
+  combined_access_ |= e.access;
+  entries_.push_back(std::move(e));
+  return entries_.back();
+}
+
+void Object::finalize() {
+  image_.assign((static_cast<size_t>(next_bit_) + 7) / 8, 0);
+  load_defaults();
+}
+
+void Object::load_defaults() {
+  std::fill(image_.begin(), image_.end(), 0);
+  for (const Entry& e : entries_) {
+    if (e.default_value.empty()) continue;
+    const size_t bits = std::min<size_t>(e.bit_length, e.default_value.size() * 8);
+    if (e.bit_offset + bits > image_.size() * 8) continue;
+    copy_bits(image_.data(), e.bit_offset, e.default_value.data(), 0, bits);
+  }
+  // An ARRAY/RECORD without a default for subindex 0 starts with all entries in use.
+  if (code_ != ObjectCode::Var && !entries_.empty() && entries_.front().subindex == 0 &&
+      entries_.front().default_value.empty() && !image_.empty())
+    image_[0] = max_subindex();
+}
+
+const Entry* Object::entry(uint8_t subindex) const {
+  if (subindex < entries_.size() && entries_[subindex].subindex == subindex)
+    return &entries_[subindex];
+  auto it = std::lower_bound(entries_.begin(), entries_.end(), subindex,
+                             [](const Entry& e, uint8_t s) { return e.subindex < s; });
+  return (it != entries_.end() && it->subindex == subindex) ? &*it : nullptr;
+}
+
+uint8_t Object::max_subindex() const {
+  return entries_.empty() ? 0 : entries_.back().subindex;
+}
+
+uint8_t Object::sub0() const {
+  if (code_ == ObjectCode::Var || image_.empty()) return 0;
+  return image_[0];
+}
+
+size_t Object::ca_end_bit(uint8_t last) const {
+  size_t end = 0;
+  for (const Entry& e : entries_) {
+    if (e.subindex > last) break;
+    const bool sub0_slot = code_ != ObjectCode::Var && e.subindex == 0;
+    end = std::max<size_t>(end, e.bit_offset + (sub0_slot ? 16u : e.bit_length));
+  }
+  return end;
+}
+
+std::span<uint8_t> Object::bytes(uint8_t subindex) {
+  const Entry* e = entry(subindex);
+  if (!e) return {};
+  const size_t first = e->bit_offset / 8;
+  if (first >= image_.size()) return {};
+  const size_t len = std::min<size_t>(e->byte_length(), image_.size() - first);
+  return std::span<uint8_t>(image_).subspan(first, len);
+}
+
+std::span<const uint8_t> Object::bytes(uint8_t subindex) const {
+  return const_cast<Object*>(this)->bytes(subindex);
+}
+
+uint64_t Object::get_u(uint8_t subindex) const {
+  const Entry* e = entry(subindex);
+  if (!e) return 0;
+  uint8_t tmp[8] = {};
+  const size_t bits = std::min<size_t>(e->bit_length, 64);
+  if (e->bit_offset + bits > image_.size() * 8) return 0;
+  copy_bits(tmp, 0, image_.data(), e->bit_offset, bits);
+  return get_le(tmp, 8);
+}
+
+int64_t Object::get_i(uint8_t subindex) const {
+  const Entry* e = entry(subindex);
+  if (!e) return 0;
+  const uint64_t u = get_u(subindex);
+  const unsigned bits = std::min<unsigned>(e->bit_length, 64);
+  if (bits == 64 || bits == 0) return static_cast<int64_t>(u);
+  const uint64_t sign = uint64_t{1} << (bits - 1);
+  return static_cast<int64_t>((u ^ sign) - sign);
+}
+
+void Object::set_u(uint8_t subindex, uint64_t value) {
+  const Entry* e = entry(subindex);
+  if (!e) return;
+  uint8_t tmp[8];
+  put_le(tmp, 8, value);
+  const size_t bits = std::min<size_t>(e->bit_length, 64);
+  if (e->bit_offset + bits > image_.size() * 8) return;
+  copy_bits(image_.data(), e->bit_offset, tmp, 0, bits);
+}
+
+void Object::set_string(uint8_t subindex, std::string_view text) {
+  auto b = bytes(subindex);
+  std::fill(b.begin(), b.end(), 0);
+  std::copy_n(text.begin(), std::min(text.size(), b.size()), b.begin());
+}
+
+std::string Object::get_string(uint8_t subindex) const {
+  auto b = bytes(subindex);
+  auto end = std::find(b.begin(), b.end(), uint8_t{0});
+  return std::string(b.begin(), end);
+}
+
+ObjectDictionary::ObjectDictionary(const ObjectDictionary& other)
+    : objects_(other.objects_), enums_(other.enums_) {
+  rebuild_index();
+}
+
+ObjectDictionary& ObjectDictionary::operator=(const ObjectDictionary& other) {
+  if (this != &other) {
+    objects_ = other.objects_;
+    enums_ = other.enums_;
+    rebuild_index();
+  }
+  return *this;
+}
+
+Object& ObjectDictionary::add(Object object) {
+  if (objects_.count(object.index()))
+    throw std::logic_error("object dictionary: index added twice: " +
+                           std::to_string(object.index()));
+  if (object.image().size() < (object.ca_end_bit(255) + 7) / 8) object.finalize();
+  const uint16_t index = object.index();
+  auto [it, inserted] = objects_.emplace(index, std::move(object));
+  (void)inserted;
+  rebuild_index();
+  return it->second;
+}
+
+void ObjectDictionary::add_enum(EnumType type) {
+  const uint16_t index = type.index;
+  enums_.insert_or_assign(index, std::move(type));
+}
+
+bool ObjectDictionary::remove(uint16_t index) {
+  if (!objects_.erase(index)) return false;
+  rebuild_index();
+  return true;
+}
+
+void ObjectDictionary::rebuild_index() {
+  keys_.clear();
+  sorted_.clear();
+  keys_.reserve(objects_.size());
+  sorted_.reserve(objects_.size());
+  for (auto& [index, obj] : objects_) {
+    keys_.push_back(index);
+    sorted_.push_back(&obj);
+  }
+}
+
+size_t ObjectDictionary::lower_bound(uint16_t index) const {
+  return static_cast<size_t>(std::lower_bound(keys_.begin(), keys_.end(), index) - keys_.begin());
+}
+
+Object* ObjectDictionary::find(uint16_t index) {
+  const size_t pos = lower_bound(index);
+  return (pos < keys_.size() && keys_[pos] == index) ? sorted_[pos] : nullptr;
+}
+
+const Object* ObjectDictionary::find(uint16_t index) const {
+  return const_cast<ObjectDictionary*>(this)->find(index);
+}
+
+const EnumType* ObjectDictionary::find_enum(uint16_t index) const {
+  auto it = enums_.find(index);
+  return it == enums_.end() ? nullptr : &it->second;
+}
+
+size_t ObjectDictionary::max_image_bytes() const {
+  size_t m = 0;
+  for (const Object* o : sorted_) m = std::max(m, o->image().size());
+  return m;
+}
+
+}  // namespace rackcat::coe
