@@ -1,0 +1,128 @@
+// The Fusion.IO-style modular device (ETG.5001 MDP): the rack configuration, the object
+// dictionary of the guide's Appendix A built from it, the CoE SDO server, the process image of
+// the current PDO assignment (0x1C12/0x1C13), the command objects 0xFBF0..0xFBF4 and the stored
+// parameters. apps/ adapts it to ecat::Application; modules/ attaches slot-card drivers to it as
+// CycleListeners and reads/writes the 0x6nnX/0x7nnX/0x2rr1/0xF3xx objects through dictionary().
+//
+// Threading: every method runs on the one thread that drives the ESC (cyclic and mailbox path
+// alike); listeners are called on that thread.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "coe/access.hpp"
+#include "coe/object_dictionary.hpp"
+#include "mdp/rack_config.hpp"
+
+namespace rackcat::mdp {
+
+class Device;
+
+// Slot-card drivers and other device behaviour plug in here. Callbacks on the cyclic path
+// (on_outputs, before_inputs, on_sync) must not allocate or block.
+class CycleListener {
+ public:
+  virtual ~CycleListener() = default;
+  // SM2 data has just been unpacked into the mapped 0x7nnX entries.
+  virtual void on_outputs(Device&) {}
+  // Refresh the 0x6nnX objects (and other TxPDO-mappable entries) before they are packed
+  // into the SM3 buffer.
+  virtual void before_inputs(Device&) {}
+  // After the ESM changed state (accepted request, error fallback, watchdog): leaving OP is
+  // where outputs go to their safe state (0x4nn0..0x4nn3).
+  virtual void on_state_changed(Device&, coe::EsmState /*from*/, coe::EsmState /*to*/) {}
+  // SYNC0/SYNC1 from the distributed clock (ETG.1000.4 §6.8.3).
+  virtual void on_sync(Device&, int /*which*/, uint64_t /*system_time_ns*/) {}
+  // SM2 watchdog expired (the ESM goes to SAFEOP with AL status 0x001B).
+  virtual void on_watchdog_expired(Device&) {}
+  // 0xFBF1 executed: latched objects (0xF39x, latched 0x2rr1:08 bits) were cleared; set again
+  // whatever cause is still active.
+  virtual void on_exception_reset(Device&) {}
+  // 0xF002 Detect Modules command executed.
+  virtual void on_detect_modules(Device&) {}
+  // Parameters were (re)loaded: start-up, 0xFBF4 reload, 0xFBF0 reset.
+  virtual void on_parameters_loaded(Device&) {}
+};
+
+struct DeviceOptions {
+  // Where 0xFBF2 stores parameters; empty = default_state_dir().
+  std::string state_dir;
+  // Load the stored parameter file at construction (a corrupt or foreign file is reported
+  // through load_report() and ignored).
+  bool load_stored_parameters = true;
+};
+
+// $XDG_STATE_HOME/rackcat, else $HOME/.local/state/rackcat.
+std::string default_state_dir();
+
+// Counters and flags of 0x1C32/0x1C33 the ESC side feeds (ETG.1020 §8 "SyncManager
+// parameter"): the device counts per cycle, the master reads them by SDO.
+struct SyncStatistics {
+  uint16_t sm_event_missed = 0;       // 0x1C3x:0B
+  uint16_t cycle_time_too_small = 0;  // 0x1C3x:0C
+  bool sync_error = false;            // 0x1C3x:20
+};
+
+class Device {
+ public:
+  explicit Device(RackConfig config, DeviceOptions options = {});
+  ~Device();
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+
+  const RackConfig& config() const;
+  coe::ObjectDictionary& dictionary();
+  const coe::ObjectDictionary& dictionary() const;
+  // Modules numbered RIM by RIM, slot by slot; module.index(0x6000, kind) etc. give the
+  // object indices of each module (ETG.5001 index distance 0x10).
+  std::span<const Module> modules() const;
+
+  // --- Mailbox (ETG.1000.4 §5.5, ETG.1000.6 §5.6): a complete mailbox request including the
+  // 6-byte mailbox header; writes at most reply.size() bytes and returns the reply length or 0.
+  size_t handle_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply);
+  // Unsolicited messages (CoE Emergency) when SM1 is free; 0 when nothing is pending.
+  size_t poll_mailbox(std::span<uint8_t> reply);
+  // Queue a CoE Emergency (ETG.1000.6 §5.6.4): error code (CiA-style, e.g. 0x4210), error
+  // register (0x1001 style bits) and 5 manufacturer bytes. False when the queue is full.
+  bool raise_emergency(uint16_t error_code, uint8_t error_register,
+                       std::array<uint8_t, 5> data = {});
+
+  // --- ESM (ETG.1000.6 §5.3). request_state returns 0 to accept or an AL status code:
+  // 0x0070 when PREOP->SAFEOP finds the configured module list 0xF030 different from the
+  // detected list 0xF050 (ETG.5001.1). SM size checks (0x001D/0x001E) are the ESC's.
+  uint16_t request_state(coe::EsmState from, coe::EsmState to);
+  void state_changed(coe::EsmState from, coe::EsmState to);
+  coe::EsmState state() const;
+
+  // --- Process data for the current 0x1C12/0x1C13 assignment (fixed once SAFEOP is reached).
+  uint16_t output_bytes() const;  // SM2 size
+  uint16_t input_bytes() const;   // SM3 size
+  // Cyclic path, no allocation: unpack SM2 into the mapped objects then call on_outputs();
+  // call before_inputs() then pack the mapped objects into SM3. Shorter spans copy what fits.
+  void write_outputs(std::span<const uint8_t> sm2);
+  void read_inputs(std::span<uint8_t> sm3);
+  void sync_event(int which, uint64_t system_time_ns);
+  void watchdog_expired();
+  SyncStatistics& sync_statistics(bool outputs);  // 0x1C32 (true) / 0x1C33 (false)
+
+  void add_listener(CycleListener* listener);
+  void remove_listener(CycleListener* listener);
+
+  // --- Stored parameters (0xFBF2 store, 0xFBF4 load, 0xFBF0 factory reset).
+  const std::string& state_dir() const;
+  std::string parameter_file() const;
+  // One line describing what happened to the stored file at the last load ("loaded 12
+  // parameters from ...", "ignored corrupt parameter file ...: reason", "no stored parameters").
+  const std::string& load_report() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rackcat::mdp
