@@ -1,0 +1,143 @@
+// Signal models for input channels. Every input channel of the emulated rack has one source
+// that is sampled on the process-data cycle (free run, SM event or SYNC0): constant, ramp,
+// sine, Gaussian noise from a seeded PRNG, replay of a CSV recording, loopback from an output
+// channel, or one output of a linear state-space plant.
+//
+// Units are physical: volts for analog channels, °C for thermocouple and RTD channels,
+// 0/1 for digital channels (>= 0.5 reads as 1).
+//
+// Sources are built when the rack starts or when the control API changes them (never on the
+// cyclic path); sample() never allocates. Oversampled cards call sample() several times per
+// cycle at sub-cycle times, so sources are functions of absolute time where possible.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rackcat::modules {
+
+class StateSpacePlant;
+
+class Source {
+ public:
+  virtual ~Source() = default;
+  // The value at t seconds since the rack started. Calls come with non-decreasing t.
+  virtual double sample(double t) = 0;
+  // One line for `rackcat ctl list`, e.g. "sine amplitude=5 frequency=1 offset=0".
+  virtual std::string describe() const = 0;
+};
+
+class ConstantSource final : public Source {
+ public:
+  explicit ConstantSource(double value) : value_(value) {}
+  double sample(double) override { return value_; }
+  std::string describe() const override;
+
+ private:
+  double value_;
+};
+
+// Sawtooth: from `from` to `to` over `period_s`, then starts again.
+class RampSource final : public Source {
+ public:
+  RampSource(double from, double to, double period_s);
+  double sample(double t) override;
+  std::string describe() const override;
+
+ private:
+  double from_, to_, period_;
+};
+
+class SineSource final : public Source {
+ public:
+  SineSource(double amplitude, double frequency_hz, double offset, double phase_rad = 0.0);
+  double sample(double t) override;
+  std::string describe() const override;
+
+ private:
+  double amplitude_, frequency_, offset_, phase_;
+};
+
+// xoshiro256** (Blackman & Vigna), seeded through splitmix64: the same seed gives the same
+// sequence on every platform, unlike std::normal_distribution.
+class Prng {
+ public:
+  explicit Prng(uint64_t seed);
+  uint64_t next();
+  // Uniform in (0, 1].
+  double uniform();
+  // Standard normal (Box-Muller, second value cached).
+  double gaussian();
+
+ private:
+  uint64_t s_[4];
+  double spare_ = 0.0;
+  bool has_spare_ = false;
+};
+
+class NoiseSource final : public Source {
+ public:
+  NoiseSource(double mean, double stddev, uint64_t seed);
+  double sample(double) override { return mean_ + stddev_ * prng_.gaussian(); }
+  std::string describe() const override;
+
+ private:
+  double mean_, stddev_;
+  uint64_t seed_;
+  Prng prng_;
+};
+
+// Replays a recording loaded once from a CSV file of "time_s,value" rows (optional header
+// row, '#' comments, times strictly increasing). Linear interpolation between rows; after the
+// last row it loops (loop = true) or holds the last value.
+class ReplaySource final : public Source {
+ public:
+  struct Sample {
+    double t;
+    double value;
+  };
+  ReplaySource(std::vector<Sample> samples, bool loop, std::string origin = {});
+  // Throws std::runtime_error("<path>:<line>: <problem>") on a bad file.
+  static std::unique_ptr<ReplaySource> from_csv(const std::string& path, bool loop);
+
+  double sample(double t) override;
+  std::string describe() const override;
+  const std::vector<Sample>& samples() const { return samples_; }
+
+ private:
+  std::vector<Sample> samples_;
+  bool loop_;
+  std::string origin_;
+  size_t cursor_ = 0;  // last segment used: sample() is O(1) for monotonic t
+};
+
+// Reads an output channel's live value (wired loopback): value = gain * output + offset.
+class LoopbackSource final : public Source {
+ public:
+  LoopbackSource(const double* output, std::string output_name, double gain = 1.0,
+                 double offset = 0.0);
+  double sample(double) override { return gain_ * *output_ + offset_; }
+  std::string describe() const override;
+
+ private:
+  const double* output_;
+  std::string name_;
+  double gain_, offset_;
+};
+
+// Output `index` of a plant stepped by the rack once per cycle before the inputs are sampled.
+class PlantSource final : public Source {
+ public:
+  PlantSource(const StateSpacePlant& plant, size_t index, std::string plant_name);
+  double sample(double) override;
+  std::string describe() const override;
+
+ private:
+  const StateSpacePlant& plant_;
+  size_t index_;
+  std::string name_;
+};
+
+}  // namespace rackcat::modules
