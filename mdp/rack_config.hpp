@@ -69,6 +69,7 @@ struct LoopbackRef {
   uint8_t slot = 0;
   uint8_t channel = 0;
   uint16_t module = 0;  // resolved module number (1..255) of rim/slot, after numbering
+  int line_hint = 0;    // rack-file line of the reference (for error messages)
 };
 struct ChannelOptions {
   uint8_t channel = 0;  // 0-based channel of the card
