@@ -1,0 +1,175 @@
+// Mailbox framing, request dispatch, mailbox counter / repeat handling and the unsolicited
+// message queue of the SDO server (ETG.1000.4 §5.6, ETG.1000.6 §5.2 and §5.6.1).
+#include "coe/sdo_server.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+#include "coe/bits.hpp"
+#include "coe/coe_header.hpp"
+#include "coe/sdo_command.hpp"
+
+namespace rackcat::coe {
+namespace {
+// Mailbox header + CoE header + the 8-byte SDO body of an abort: the smallest reply the server
+// must always be able to send.
+constexpr size_t kMinReply = MailboxHeader::kSize + CoeHeader::kSize + 8;
+constexpr size_t kMinTransferBuffer = 256;
+}  // namespace
+
+SdoServer::SdoServer(ObjectDictionary& od) : od_(od) {
+  prepare();
+}
+
+void SdoServer::prepare() {
+  const size_t n = std::max(od_.max_image_bytes(), kMinTransferBuffer);
+  data_.assign(n, 0);
+  scratch_.assign(n, 0);
+  value_.assign(n, 0);
+  // An entry description holds three values of the entry (default, min, max) plus name.
+  info_buf_.assign(3 * n + 512, 0);
+}
+
+void SdoServer::reset() {
+  transfer_ = {};
+  info_ = {};
+  last_request_counter_ = 0;
+  last_request_len_ = 0;
+  last_reply_len_ = 0;
+}
+
+void SdoServer::queue_emergency(uint16_t error_code, uint8_t error_register,
+                                std::array<uint8_t, 5> data) {
+  emergencies_.push(Emergency{error_code, error_register, data});
+}
+
+size_t SdoServer::finish(std::span<uint8_t> reply, size_t data_length, MailboxType type) {
+  counter_ = next_mailbox_counter(counter_);
+  MailboxHeader h;
+  h.length = static_cast<uint16_t>(data_length);
+  h.type = static_cast<uint8_t>(type);
+  h.counter = counter_;
+  h.encode(reply);
+  return MailboxHeader::kSize + data_length;
+}
+
+size_t SdoServer::finish_coe(std::span<uint8_t> reply, size_t body_length, uint8_t service) {
+  CoeHeader{0, service}.encode(reply.subspan(MailboxHeader::kSize));
+  return finish(reply, CoeHeader::kSize + body_length, MailboxType::CoE);
+}
+
+size_t SdoServer::mailbox_error(std::span<uint8_t> reply, MailboxError error, uint16_t address) {
+  const uint8_t next = next_mailbox_counter(counter_);
+  const size_t n = write_mailbox_error(reply, error, address, next);
+  if (n) counter_ = next;
+  return n;
+}
+
+size_t SdoServer::abort(std::span<uint8_t> reply, uint16_t index, uint8_t subindex,
+                        AbortCode code) {
+  // ETG.1000.6 §5.6.2.7.1: an abort travels as an SDO *request* (service 2), command byte
+  // exactly 0x80, index, subindex, 32-bit abort code: 10 bytes with the CoE header.
+  transfer_ = {};
+  uint8_t* b = reply.data() + MailboxHeader::kSize + CoeHeader::kSize;
+  b[0] = sdo::kAbortCommand;
+  put_le16(b + 1, index);
+  b[3] = subindex;
+  put_le32(b + 4, static_cast<uint32_t>(code));
+  return finish_coe(reply, 8, static_cast<uint8_t>(CoeService::SdoRequest));
+}
+
+size_t SdoServer::handle(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                         EsmState state) {
+  if (reply.size() < kMinReply) return mailbox_error(reply, MailboxError::NoMoreMemory, 0);
+  const auto hdr = MailboxHeader::decode(request);
+  if (!hdr) return mailbox_error(reply, MailboxError::Syntax, 0);
+  if (hdr->length > request.size() - MailboxHeader::kSize)
+    return mailbox_error(reply, MailboxError::InvalidSize, hdr->address);
+  const auto msg = request.first(MailboxHeader::kSize + hdr->length);
+
+  // A repeat of the previous request (same non-zero counter, same bytes) gets the previous
+  // reply again: the master lost it and must not have the request executed twice.
+  if (hdr->counter != 0 && hdr->counter == last_request_counter_ && last_reply_len_ != 0 &&
+      msg.size() == last_request_len_ && last_reply_len_ <= reply.size() &&
+      std::memcmp(msg.data(), last_request_.data(), msg.size()) == 0) {
+    std::memcpy(reply.data(), last_reply_.data(), last_reply_len_);
+    return last_reply_len_;
+  }
+
+  // A new request ends any SDO Information fragments still queued for an earlier one.
+  info_ = {};
+  const size_t n = dispatch(msg, reply, state);
+
+  last_request_counter_ = hdr->counter;
+  if (msg.size() <= last_request_.size() && n <= last_reply_.size()) {
+    std::memcpy(last_request_.data(), msg.data(), msg.size());
+    last_request_len_ = msg.size();
+    std::memcpy(last_reply_.data(), reply.data(), n);
+    last_reply_len_ = n;
+  } else {
+    last_request_len_ = 0;
+    last_reply_len_ = 0;
+  }
+  return n;
+}
+
+size_t SdoServer::dispatch(std::span<const uint8_t> msg, std::span<uint8_t> reply, EsmState state) {
+  const auto hdr = *MailboxHeader::decode(msg);
+  if (hdr.channel != 0) return mailbox_error(reply, MailboxError::InvalidChannel, hdr.address);
+  if (hdr.mailbox_type() != MailboxType::CoE)
+    return mailbox_error(reply, MailboxError::UnsupportedProtocol, hdr.address);
+  const auto data = msg.subspan(MailboxHeader::kSize);
+  const auto coe = CoeHeader::decode(data);
+  if (!coe) return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
+  const auto body = data.subspan(CoeHeader::kSize);
+  switch (static_cast<CoeService>(coe->service)) {
+    case CoeService::SdoRequest:
+      // Every SDO request is at least 8 bytes after the CoE header (mailbox length >= 10).
+      if (body.size() < sdo::kInitiateBody)
+        return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
+      return sdo_request(body, reply, state);
+    case CoeService::SdoInformation:
+      if (body.size() < 4) return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
+      return sdo_info(body, reply);
+    default:
+      return mailbox_error(reply, MailboxError::ServiceNotSupported, hdr.address);
+  }
+}
+
+size_t SdoServer::sdo_request(std::span<const uint8_t> body, std::span<uint8_t> reply,
+                              EsmState state) {
+  switch (sdo::specifier(body[0])) {
+    case sdo::kCcsDownloadInitiate:
+      return download_initiate(body, reply, state);
+    case sdo::kCcsDownloadSegment:
+      return download_segment(body, reply, state);
+    case sdo::kCcsUploadInitiate:
+      return upload_initiate(body, reply, state);
+    case sdo::kCcsUploadSegment:
+      return upload_segment(body, reply);
+    case sdo::kCcsAbort:
+      // The master gave up the transfer (ETG.1000.6 §5.6.2.7): no reply.
+      transfer_ = {};
+      return 0;
+    default:
+      // Block transfers (5, 6) and 7 do not exist in CoE.
+      return abort(reply, get_le16(&body[1]), body[3], AbortCode::CommandSpecifier);
+  }
+}
+
+size_t SdoServer::poll(std::span<uint8_t> reply) {
+  if (reply.size() < kMinReply) return 0;
+  Emergency e;
+  if (emergencies_.pop(e)) {
+    // ETG.1000.6 §5.6.4: error code, error register, 5 data bytes after the CoE header.
+    uint8_t* b = reply.data() + MailboxHeader::kSize + CoeHeader::kSize;
+    put_le16(b, e.error_code);
+    b[2] = e.error_register;
+    std::copy(e.data.begin(), e.data.end(), b + 3);
+    return finish_coe(reply, 8, static_cast<uint8_t>(CoeService::Emergency));
+  }
+  if (info_.kind != InfoKind::None) return info_fragment(reply);
+  return 0;
+}
+
+}  // namespace rackcat::coe
