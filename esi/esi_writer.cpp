@@ -1,0 +1,496 @@
+#include "esi/esi_writer.hpp"
+
+#include <fmt/format.h>
+
+#include <map>
+#include <pugixml.hpp>
+#include <set>
+#include <sstream>
+
+#include "coe/access.hpp"
+#include "coe/data_type.hpp"
+
+namespace rackcat::esi {
+namespace {
+
+using coe::access::kReadOp;
+using coe::access::kReadPreOp;
+using coe::access::kReadSafeOp;
+using coe::access::kWriteOp;
+using coe::access::kWritePreOp;
+using coe::access::kWriteSafeOp;
+
+// ETG.2000 AccessType restriction names for a subset of {PREOP, SAFEOP, OP}.
+std::string restriction(bool preop, bool safeop, bool op) {
+  if (preop && safeop && op) return "";
+  // The schema's enumeration: PreOP, PreOP_SafeOP, PreOP_OP, SafeOP, SafeOP_OP, OP.
+  static constexpr const char* kNames[8] = {"",      "OP",       "SafeOP",       "SafeOP_OP",
+                                            "PreOP", "PreOP_OP", "PreOP_SafeOP", ""};
+  return kNames[(preop ? 4 : 0) | (safeop ? 2 : 0) | (op ? 1 : 0)];
+}
+
+std::string hex_bytes(std::span<const uint8_t> bytes) {
+  static constexpr char kDigits[] = "0123456789ABCDEF";
+  std::string out;
+  out.reserve(bytes.size() * 2);
+  for (uint8_t b : bytes) {
+    out.push_back(kDigits[b >> 4]);
+    out.push_back(kDigits[b & 0xF]);
+  }
+  return out;
+}
+
+// The current value of an entry, little-endian, (bit_length + 7) / 8 bytes: what a master
+// reads after start-up is what the ESI announces as default.
+std::vector<uint8_t> entry_value(const coe::Object& obj, const coe::Entry& e) {
+  auto image = obj.image();
+  std::vector<uint8_t> out(e.byte_length(), 0);
+  if (e.bit_offset % 8 == 0 && e.bit_length % 8 == 0) {
+    size_t start = e.bit_offset / 8;
+    for (size_t i = 0; i < out.size() && start + i < image.size(); ++i) out[i] = image[start + i];
+    return out;
+  }
+  for (uint16_t bit = 0; bit < e.bit_length; ++bit) {
+    size_t src = size_t{e.bit_offset} + bit;
+    if (src / 8 >= image.size()) break;
+    if (image[src / 8] & (1u << (src % 8))) out[bit / 8] |= static_cast<uint8_t>(1u << (bit % 8));
+  }
+  return out;
+}
+
+std::string visible_string(std::span<const uint8_t> bytes) {
+  std::string s(bytes.begin(), bytes.end());
+  auto end = s.find('\0');
+  if (end != std::string::npos) s.resize(end);
+  return s;
+}
+
+void text_child(pugi::xml_node parent, const char* name, const std::string& text) {
+  parent.append_child(name).text().set(text.c_str());
+}
+
+bool is_readable(uint16_t access) {
+  return (access & coe::access::kReadAll) != 0;
+}
+
+// Writes one Dictionary (ETG.2000 DictionaryType): the DataTypes every object uses, then the
+// Objects. `depend_on_slot` marks module objects whose index moves with the slot.
+class DictionaryWriter {
+ public:
+  DictionaryWriter(pugi::xml_node dictionary, const coe::ObjectDictionary& od, bool depend_on_slot)
+      : od_(od), depend_on_slot_(depend_on_slot) {
+    types_ = dictionary.append_child("DataTypes");
+    objects_ = dictionary.append_child("Objects");
+  }
+
+  void write_all() {
+    od_.for_each([&](const coe::Object& obj) { write_object(obj); });
+  }
+
+ private:
+  // A basic or enum type by name, declared once.
+  std::string declare_entry_type(const coe::Entry& e) {
+    std::string name = esi_type_name(od_, e);
+    if (!declared_.insert(name).second) return name;
+    auto dt = types_.append_child("DataType");
+    if (coe::is_enum_type(e.data_type)) {
+      const auto* en = od_.find_enum(e.data_type);
+      text_child(dt, "Name", name);
+      dt.append_child("BitSize").text().set(en ? en->bit_size : e.bit_length);
+      if (en) {
+        for (const auto& v : en->values) {
+          auto info = dt.append_child("EnumInfo");
+          text_child(info, "Text", v.name);
+          info.append_child("Enum").text().set(static_cast<long long>(v.value));
+        }
+      }
+    } else {
+      text_child(dt, "Name", name);
+      dt.append_child("BitSize").text().set(e.bit_length);
+    }
+    return name;
+  }
+
+  void flags(pugi::xml_node parent, uint16_t access, bool with_pdo) {
+    auto f = parent.append_child("Flags");
+    auto a = esi_access(access);
+    auto node = f.append_child("Access");
+    node.text().set(a.access.c_str());
+    if (!a.read_restrictions.empty())
+      node.append_attribute("ReadRestrictions").set_value(a.read_restrictions.c_str());
+    if (!a.write_restrictions.empty())
+      node.append_attribute("WriteRestrictions").set_value(a.write_restrictions.c_str());
+    if (with_pdo) {
+      auto m = esi_pdo_mapping(access);
+      if (!m.empty()) text_child(f, "PdoMapping", m);
+    }
+    if (access & coe::access::kBackup) f.append_child("Backup").text().set(1);
+    if (access & coe::access::kSettings) f.append_child("Setting").text().set(1);
+  }
+
+  void default_info(pugi::xml_node info, const coe::Object& obj, const coe::Entry& e) {
+    if (!is_readable(e.access)) return;
+    auto value = entry_value(obj, e);
+    if (e.type() == coe::DataType::VisibleString) {
+      text_child(info, "DefaultString", visible_string(value));
+    } else {
+      text_child(info, "DefaultData", hex_bytes(value));
+    }
+  }
+
+  // ARRAY objects whose elements share type, size and access get an ETG.2000 array type
+  // (BaseType + ArrayInfo); anything else is described entry by entry as a record.
+  static bool uniform_array(const coe::Object& obj) {
+    if (obj.code() != coe::ObjectCode::Array) return false;
+    const auto& es = obj.entries();
+    if (es.size() < 2) return false;
+    const auto& first = es[1];
+    for (size_t i = 1; i < es.size(); ++i) {
+      const auto& e = es[i];
+      if (e.padding || e.subindex != i || e.data_type != first.data_type ||
+          e.bit_length != first.bit_length || e.access != first.access ||
+          e.bit_offset != first.bit_offset + (i - 1) * first.bit_length) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  void write_object(const coe::Object& obj) {
+    auto o = objects_.append_child("Object");
+    auto idx = o.append_child("Index");
+    idx.text().set(esi_hex(obj.index(), 4).c_str());
+    if (depend_on_slot_) idx.append_attribute("DependOnSlot").set_value(true);
+    text_child(o, "Name", obj.name());
+
+    if (obj.code() == coe::ObjectCode::Var) {
+      const auto* e = obj.entry(0);
+      if (!e && !obj.entries().empty()) e = &obj.entries().front();
+      if (!e) return;
+      text_child(o, "Type", declare_entry_type(*e));
+      o.append_child("BitSize").text().set(e->bit_length);
+      auto info = o.append_child("Info");
+      default_info(info, obj, *e);
+      if (!info.first_child()) o.remove_child(info);
+      flags(o, e->access, true);
+      return;
+    }
+
+    std::string dt_name = fmt::format("DT{:04X}", obj.index());
+    auto size = static_cast<unsigned>(obj.bit_size());
+    text_child(o, "Type", dt_name);
+    o.append_child("BitSize").text().set(size);
+    auto info = o.append_child("Info");
+    auto dt = types_.append_child("DataType");
+    text_child(dt, "Name", dt_name);
+    dt.append_child("BitSize").text().set(size);
+    declared_.insert(dt_name);
+
+    const auto& es = obj.entries();
+    if (uniform_array(obj)) {
+      const auto& sub0 = es[0];
+      const auto& first = es[1];
+      std::string elem = declare_entry_type(first);
+      std::string arr_name = dt_name + "ARR";
+      auto n = static_cast<unsigned>(es.size() - 1);
+      // The array type goes before the object type that uses it.
+      auto arr = types_.insert_child_before("DataType", dt);
+      text_child(arr, "Name", arr_name);
+      text_child(arr, "BaseType", elem);
+      arr.append_child("BitSize").text().set(n * first.bit_length);
+      auto ai = arr.append_child("ArrayInfo");
+      ai.append_child("LBound").text().set(1);
+      ai.append_child("Elements").text().set(n);
+      declared_.insert(arr_name);
+      write_subitem(dt, sub0, "SubIndex 000", declare_entry_type(sub0));
+      auto elems = dt.append_child("SubItem");
+      text_child(elems, "Name", "Elements");
+      text_child(elems, "Type", arr_name);
+      elems.append_child("BitSize").text().set(n * first.bit_length);
+      elems.append_child("BitOffs").text().set(first.bit_offset);
+      flags(elems, first.access, true);
+      for (const auto& e : es) {
+        if (!is_readable(e.access)) continue;
+        auto si = info.append_child("SubItem");
+        text_child(si, "Name", fmt::format("SubIndex {:03d}", e.subindex));
+        default_info(si.append_child("Info"), obj, e);
+      }
+    } else {
+      std::set<std::string> names;
+      for (const auto& e : es) {
+        if (e.padding) continue;  // a layout gap, not an addressable subindex
+        std::string name = e.subindex == 0 ? "SubIndex 000" : e.name;
+        if (name.empty() || !names.insert(name).second) {
+          name = fmt::format("{} (SubIndex {:03d})", e.name.empty() ? "Entry" : e.name, e.subindex);
+          names.insert(name);
+        }
+        write_subitem(dt, e, name, declare_entry_type(e));
+        if (!is_readable(e.access)) continue;
+        auto si = info.append_child("SubItem");
+        text_child(si, "Name", name);
+        default_info(si.append_child("Info"), obj, e);
+      }
+    }
+    if (!info.first_child()) o.remove_child(info);
+    const auto* sub0 = obj.entry(0);
+    flags(o, sub0 ? sub0->access : coe::access::kRo, false);
+  }
+
+  void write_subitem(pugi::xml_node dt, const coe::Entry& e, const std::string& name,
+                     const std::string& type) {
+    auto si = dt.append_child("SubItem");
+    text_child(si, "SubIdx", std::to_string(e.subindex));
+    text_child(si, "Name", name);
+    text_child(si, "Type", type);
+    si.append_child("BitSize").text().set(e.bit_length);
+    si.append_child("BitOffs").text().set(e.bit_offset);
+    flags(si, e.access, true);
+  }
+
+  const coe::ObjectDictionary& od_;
+  bool depend_on_slot_;
+  pugi::xml_node types_;
+  pugi::xml_node objects_;
+  std::set<std::string> declared_;
+};
+
+void write_profile(pugi::xml_node parent, const char* element, const coe::ObjectDictionary& od,
+                   bool depend_on_slot) {
+  auto profile = parent.append_child(element);
+  // ETG.5001: a modular device announces profile 5001.
+  profile.append_child("ProfileNo").text().set(5001);
+  DictionaryWriter(profile.append_child("Dictionary"), od, depend_on_slot).write_all();
+}
+
+void write_pdo(pugi::xml_node parent, const char* element, const PdoDescription& p,
+               const coe::ObjectDictionary* od, bool depend_on_slot) {
+  auto node = parent.append_child(element);
+  if (p.fixed) node.append_attribute("Fixed").set_value(true);
+  if (p.mandatory) node.append_attribute("Mandatory").set_value(true);
+  // Sm present = assigned by default (ETG.2000 PdoType/@Sm).
+  if (p.assigned) node.append_attribute("Sm").set_value(p.sm);
+  auto idx = node.append_child("Index");
+  idx.text().set(esi_hex(p.index, 4).c_str());
+  if (depend_on_slot) idx.append_attribute("DependOnSlot").set_value(true);
+  text_child(node, "Name", p.name);
+  for (const auto& e : p.entries) {
+    auto en = node.append_child("Entry");
+    auto ei = en.append_child("Index");
+    ei.text().set(esi_hex(e.index, 4).c_str());
+    if (e.index == 0) {  // padding gap
+      en.append_child("BitLen").text().set(e.bit_length);
+      continue;
+    }
+    if (depend_on_slot && e.index >= 0x2000) ei.append_attribute("DependOnSlot").set_value(true);
+    text_child(en, "SubIndex", esi_hex(e.subindex, 2));
+    en.append_child("BitLen").text().set(e.bit_length);
+    if (!e.name.empty()) text_child(en, "Name", e.name);
+    std::string type;
+    if (od) {
+      if (const auto* obj = od->find(e.index))
+        if (const auto* entry = obj->entry(e.subindex)) type = esi_type_name(*od, *entry);
+    }
+    if (type.empty()) {
+      coe::Entry synthetic;
+      synthetic.data_type = e.data_type;
+      synthetic.bit_length = e.bit_length;
+      type = od ? esi_type_name(*od, synthetic) : std::string(coe::type_name(synthetic.type()));
+    }
+    if (!type.empty()) text_child(en, "DataType", type);
+  }
+}
+
+const char* sm_text(SmType t) {
+  switch (t) {
+    case SmType::MailboxOut:
+      return "MBoxOut";
+    case SmType::MailboxIn:
+      return "MBoxIn";
+    case SmType::ProcessOut:
+      return "Outputs";
+    case SmType::ProcessIn:
+      return "Inputs";
+    default:
+      return "";
+  }
+}
+
+const char* fmmu_text(FmmuUsage f) {
+  switch (f) {
+    case FmmuUsage::Outputs:
+      return "Outputs";
+    case FmmuUsage::Inputs:
+      return "Inputs";
+    case FmmuUsage::SmStatus:
+      return "MBoxState";
+    default:
+      return "";
+  }
+}
+
+struct StringWriter : pugi::xml_writer {
+  std::string out;
+  void write(const void* data, size_t size) override {
+    out.append(static_cast<const char*>(data), size);
+  }
+};
+
+}  // namespace
+
+std::string esi_hex(uint32_t value, int digits) {
+  return fmt::format("#x{:0{}X}", value, digits);
+}
+
+EsiAccess esi_access(uint16_t a) {
+  bool r = (a & coe::access::kReadAll) != 0;
+  bool w = (a & coe::access::kWriteAll) != 0;
+  EsiAccess out;
+  out.access = r && w ? "rw" : w ? "wo" : "ro";
+  if (r) out.read_restrictions = restriction(a & kReadPreOp, a & kReadSafeOp, a & kReadOp);
+  if (w) out.write_restrictions = restriction(a & kWritePreOp, a & kWriteSafeOp, a & kWriteOp);
+  return out;
+}
+
+std::string esi_pdo_mapping(uint16_t a) {
+  std::string m;
+  if (a & coe::access::kTxPdoMappable) m += "T";
+  if (a & coe::access::kRxPdoMappable) m += "R";
+  return m;
+}
+
+std::string esi_type_name(const coe::ObjectDictionary& od, const coe::Entry& e) {
+  if (coe::is_enum_type(e.data_type)) {
+    if (const auto* en = od.find_enum(e.data_type)) return en->name;
+    return fmt::format("DT{:04X}", e.data_type);
+  }
+  auto t = e.type();
+  if (coe::is_string(t)) return fmt::format("{}({})", coe::type_name(t), e.bit_length / 8);
+  auto name = coe::type_name(t);
+  if (!name.empty()) return std::string(name);
+  // Unknown type index: name it by size so the file stays self-consistent.
+  switch (e.bit_length) {
+    case 8:
+      return "USINT";
+    case 16:
+      return "UINT";
+    case 32:
+      return "UDINT";
+    case 64:
+      return "ULINT";
+    default:
+      if (e.bit_length < 8) return fmt::format("BIT{}", e.bit_length);
+      return fmt::format("OCTET_STRING({})", (e.bit_length + 7) / 8);
+  }
+}
+
+std::string write_esi(const EsiContent& c) {
+  const DeviceDescription& d = *c.device;
+  pugi::xml_document doc;
+  auto decl = doc.append_child(pugi::node_declaration);
+  decl.append_attribute("version").set_value("1.0");
+  decl.append_attribute("encoding").set_value("UTF-8");
+  auto root = doc.append_child("EtherCATInfo");
+  root.append_attribute("xmlns:xsi").set_value("http://www.w3.org/2001/XMLSchema-instance");
+  root.append_attribute("xsi:noNamespaceSchemaLocation").set_value("EtherCATInfo.xsd");
+  root.append_attribute("Version").set_value("1.14");
+
+  auto vendor = root.append_child("Vendor");
+  text_child(vendor, "Id", esi_hex(d.vendor_id, 8));
+  text_child(vendor, "Name", d.vendor_name);
+
+  auto descriptions = root.append_child("Descriptions");
+  auto group = descriptions.append_child("Groups").append_child("Group");
+  text_child(group, "Type", d.group_type);
+  text_child(group, "Name", d.group_name);
+
+  auto device = descriptions.append_child("Devices").append_child("Device");
+  device.append_attribute("Physics").set_value("YY");
+  auto type = device.append_child("Type");
+  type.text().set(d.order_code.c_str());
+  type.append_attribute("ProductCode").set_value(esi_hex(d.product_code, 8).c_str());
+  type.append_attribute("RevisionNo").set_value(esi_hex(d.revision, 8).c_str());
+  text_child(device, "Name", d.device_name);
+  text_child(device, "GroupType", d.group_type);
+  write_profile(device, "Profile", *c.dictionary, false);
+
+  for (auto f : d.fmmus) text_child(device, "Fmmu", fmmu_text(f));
+  for (const auto& sm : d.sms) {
+    auto node = device.append_child("Sm");
+    node.text().set(sm_text(sm.type));
+    node.append_attribute("MinSize").set_value(sm.min_size);
+    node.append_attribute("MaxSize").set_value(sm.max_size);
+    node.append_attribute("DefaultSize").set_value(sm.default_size);
+    node.append_attribute("StartAddress").set_value(esi_hex(sm.start, 4).c_str());
+    node.append_attribute("ControlByte").set_value(esi_hex(sm.control, 2).c_str());
+    node.append_attribute("Enable").set_value(sm.enable ? 1 : 0);
+  }
+  for (const auto& p : d.rx_pdos) write_pdo(device, "RxPdo", p, c.dictionary, false);
+  for (const auto& p : d.tx_pdos) write_pdo(device, "TxPdo", p, c.dictionary, false);
+
+  auto mailbox = device.append_child("Mailbox");
+  auto coe_node = mailbox.append_child("CoE");
+  coe_node.append_attribute("SdoInfo").set_value(d.coe.sdo_info);
+  coe_node.append_attribute("PdoAssign").set_value(d.coe.pdo_assign);
+  coe_node.append_attribute("PdoConfig").set_value(d.coe.pdo_config);
+  coe_node.append_attribute("PdoUpload").set_value(d.coe.upload_at_startup);
+  coe_node.append_attribute("CompleteAccess").set_value(d.coe.complete_access);
+  coe_node.append_attribute("SegmentedSdo").set_value(d.coe.segmented_sdo);
+
+  if (!d.dc_modes.empty()) {
+    auto dc = device.append_child("Dc");
+    for (const auto& m : d.dc_modes) {
+      auto om = dc.append_child("OpMode");
+      text_child(om, "Name", m.name);
+      text_child(om, "Desc", m.description);
+      text_child(om, "AssignActivate", esi_hex(m.assign_activate, 4));
+      if (m.assign_activate & 0x0100) {  // SYNC0 active: cycle = factor x master cycle
+        auto ct = om.append_child("CycleTimeSync0");
+        ct.text().set(static_cast<long long>(m.cycle_time_sync0));
+        ct.append_attribute("Factor").set_value(m.cycle_time_sync0_factor);
+        om.append_child("ShiftTimeSync0").text().set(m.shift_time_sync0);
+      }
+    }
+  }
+
+  if (!c.modules.empty()) {
+    auto slots = device.append_child("Slots");
+    slots.append_attribute("DownloadModuleIdentList").set_value(true);
+    slots.append_attribute("MaxSlotCount").set_value(c.slots.max_slots);
+    slots.append_attribute("SlotPdoIncrement").set_value(c.slots.pdo_increment);
+    slots.append_attribute("SlotIndexIncrement")
+        .set_value(esi_hex(c.slots.index_increment, 2).c_str());
+    slots.append_attribute("IdentifyModuleBy").set_value("ModuleIdent");
+    auto slot = slots.append_child("Slot");
+    slot.append_attribute("MinInstances").set_value(0);
+    slot.append_attribute("MaxInstances").set_value(c.slots.max_slots);
+    slot.append_attribute("SlotPdoIncrement").set_value(c.slots.pdo_increment);
+    slot.append_attribute("SlotIndexIncrement")
+        .set_value(esi_hex(c.slots.index_increment, 2).c_str());
+    text_child(slot, "Name", c.slots.slot_name);
+    for (const auto& m : c.modules) text_child(slot, "ModuleIdent", esi_hex(m.ident, 8));
+  }
+
+  auto eeprom = device.append_child("Eeprom");
+  eeprom.append_child("ByteSize").text().set(static_cast<unsigned long long>(c.eeprom_bytes));
+  text_child(eeprom, "ConfigData", hex_bytes(c.config_data));
+
+  if (!c.modules.empty()) {
+    auto modules = descriptions.append_child("Modules");
+    for (const auto& m : c.modules) {
+      auto mod = modules.append_child("Module");
+      auto t = mod.append_child("Type");
+      t.text().set(m.type.c_str());
+      t.append_attribute("ModuleIdent").set_value(esi_hex(m.ident, 8).c_str());
+      text_child(mod, "Name", m.name);
+      for (const auto& p : m.rx_pdos) write_pdo(mod, "RxPdo", p, &m.dictionary, true);
+      for (const auto& p : m.tx_pdos) write_pdo(mod, "TxPdo", p, &m.dictionary, true);
+      write_profile(mod, "Profile", m.dictionary, true);
+    }
+  }
+
+  StringWriter w;
+  doc.save(w, "  ", pugi::format_default, pugi::encoding_utf8);
+  return std::move(w.out);
+}
+
+}  // namespace rackcat::esi

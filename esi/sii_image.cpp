@@ -1,0 +1,253 @@
+#include "esi/sii_image.hpp"
+
+#include <bit>
+#include <map>
+#include <string>
+
+#include "esi/little_endian.hpp"
+#include "esi/sii_crc.hpp"
+
+namespace rackcat::esi {
+namespace {
+
+// The Strings category (ETG.2010 §2.3): one count byte, then length-prefixed strings numbered
+// from 1. Index 0 means "no string". Names repeat a lot across modules ("Input 1"), so equal
+// texts share an index; once 255 distinct texts are used the rest get index 0 (no name):
+// masters use the names for display only.
+class StringTable {
+ public:
+  uint8_t intern(const std::string& text) {
+    if (text.empty()) return 0;
+    if (auto it = index_.find(text); it != index_.end()) return it->second;
+    if (texts_.size() >= sii::kMaxStrings) return 0;
+    // A length byte limits one string to 255 characters.
+    texts_.push_back(text.size() > 255 ? text.substr(0, 255) : text);
+    auto idx = static_cast<uint8_t>(texts_.size());
+    index_.emplace(text, idx);
+    return idx;
+  }
+  std::vector<uint8_t> encode() const {
+    std::vector<uint8_t> out;
+    le::put8(out, static_cast<uint8_t>(texts_.size()));
+    for (const auto& t : texts_) {
+      le::put8(out, static_cast<uint8_t>(t.size()));
+      out.insert(out.end(), t.begin(), t.end());
+    }
+    return out;
+  }
+
+ private:
+  std::vector<std::string> texts_;
+  std::map<std::string, uint8_t> index_;
+};
+
+void append_category(std::vector<uint8_t>& image, uint16_t type, std::vector<uint8_t> data) {
+  if (data.size() % 2) data.push_back(0);  // categories are whole words
+  if (data.size() / 2 > 0xFFFF) {
+    throw SiiEncodeError("SII category " + std::to_string(type) + " needs " +
+                         std::to_string(data.size() / 2) + " words, more than 65535");
+  }
+  le::put16(image, type);
+  le::put16(image, static_cast<uint16_t>(data.size() / 2));
+  image.insert(image.end(), data.begin(), data.end());
+}
+
+uint8_t coe_details_byte(const CoeDetails& c) {
+  uint8_t b = 0;
+  if (c.sdo) b |= sii::kCoeSdo;
+  if (c.sdo_info) b |= sii::kCoeSdoInfo;
+  if (c.pdo_assign) b |= sii::kCoePdoAssign;
+  if (c.pdo_config) b |= sii::kCoePdoConfig;
+  if (c.upload_at_startup) b |= sii::kCoeUploadAtStartup;
+  if (c.complete_access) b |= sii::kCoeCompleteAccess;
+  return b;
+}
+
+// General category, 32 bytes (ETG.2010 §2.4 Table 6).
+std::vector<uint8_t> encode_general(const DeviceDescription& d, StringTable& strings) {
+  std::vector<uint8_t> g(sii::kGeneralBytes, 0);
+  g[0] = strings.intern(d.group_type);   // GroupIdx
+  g[1] = 0;                              // ImgIdx: no image
+  g[2] = strings.intern(d.order_code);   // OrderIdx
+  g[3] = strings.intern(d.device_name);  // NameIdx
+  g[5] = coe_details_byte(d.coe);
+  g[6] = 0;   // FoE details
+  g[7] = 0;   // EoE details
+  g[8] = 0;   // SoE channels
+  g[9] = 0;   // DS402 channels
+  g[10] = 0;  // SysmanClass
+  g[11] = 0;  // Flags: SafeOp/NotLRW/MBoxDataLinkLayer/IdentALSts/IdentPhyM all off
+  le::store16(g, 12, static_cast<uint16_t>(d.ebus_current_ma));
+  g[14] = g[0];  // GroupIdx repeated for compatibility
+  le::store16(g, 16, d.physical_ports);
+  le::store16(g, 18, 0);  // physical memory address of the identification value
+  return g;
+}
+
+std::vector<uint8_t> encode_fmmus(const DeviceDescription& d) {
+  std::vector<uint8_t> out;
+  for (auto f : d.fmmus) le::put8(out, static_cast<uint8_t>(f));
+  if (out.size() % 2) le::put8(out, static_cast<uint8_t>(FmmuUsage::Unused));
+  return out;
+}
+
+// SyncManager category: 8 bytes per SM (ETG.2010 §2.6 Table 10).
+std::vector<uint8_t> encode_sms(const DeviceDescription& d) {
+  std::vector<uint8_t> out;
+  for (const auto& sm : d.sms) {
+    le::put16(out, sm.start);
+    le::put16(out, sm.default_size);
+    le::put8(out, sm.control);
+    le::put8(out, 0);  // status register: don't care
+    le::put8(out, sm.enable ? 0x01 : 0x00);
+    le::put8(out, static_cast<uint8_t>(sm.type));
+  }
+  return out;
+}
+
+// The bit-size type code of a PDO entry: the CoE data type index fits a byte for basic types;
+// a device enumeration is carried as the unsigned type of its size.
+uint8_t entry_type_byte(const PdoEntryDescription& e) {
+  if (e.data_type <= 0xFF) return static_cast<uint8_t>(e.data_type);
+  switch (e.bit_length) {
+    case 8:
+      return 0x05;
+    case 16:
+      return 0x06;
+    case 32:
+      return 0x07;
+    default:
+      return 0;
+  }
+}
+
+// TxPDO/RxPDO category (ETG.2010 §2.7 Table 11/12): 8-byte PDO header, 8 bytes per entry.
+std::vector<uint8_t> encode_pdos(const std::vector<PdoDescription>& pdos, StringTable& strings) {
+  std::vector<uint8_t> out;
+  for (const auto& p : pdos) {
+    if (!p.assigned) continue;
+    if (p.entries.size() > 255) {
+      throw SiiEncodeError("PDO " + std::to_string(p.index) + " has more than 255 entries");
+    }
+    le::put16(out, p.index);
+    le::put8(out, static_cast<uint8_t>(p.entries.size()));
+    le::put8(out, p.sm);
+    le::put8(out, 0);  // Synchronization: not used
+    le::put8(out, strings.intern(p.name));
+    uint16_t flags = sii::kPdoDefault;
+    if (p.mandatory) flags |= sii::kPdoMandatory;
+    if (p.fixed) flags |= sii::kPdoFixedContent;
+    le::put16(out, flags);
+    for (const auto& e : p.entries) {
+      le::put16(out, e.index);
+      le::put8(out, e.subindex);
+      le::put8(out, e.index == 0 ? 0 : strings.intern(e.name));
+      le::put8(out, e.index == 0 ? 0 : entry_type_byte(e));
+      le::put8(out, e.bit_length);
+      le::put16(out, 0);  // flags: reserved
+    }
+  }
+  return out;
+}
+
+// DC category: 24 bytes per op mode (ETG.2010 §2.8 Table 13).
+std::vector<uint8_t> encode_dc(const DeviceDescription& d, StringTable& strings) {
+  std::vector<uint8_t> out;
+  for (const auto& m : d.dc_modes) {
+    le::put32(out, m.cycle_time_sync0);
+    le::put32(out, static_cast<uint32_t>(m.shift_time_sync0));
+    le::put32(out, static_cast<uint32_t>(m.shift_time_sync1));
+    le::put16(out, static_cast<uint16_t>(m.cycle_time_sync1_factor));
+    le::put16(out, m.assign_activate);
+    le::put16(out, static_cast<uint16_t>(m.cycle_time_sync0_factor));
+    le::put8(out, strings.intern(m.name));
+    le::put8(out, strings.intern(m.description));
+    le::put32(out, 0);  // reserved
+  }
+  return out;
+}
+
+const SyncManagerDescription* find_sm(const DeviceDescription& d, SmType type) {
+  for (const auto& sm : d.sms)
+    if (sm.type == type) return &sm;
+  return nullptr;
+}
+
+}  // namespace
+
+std::vector<uint8_t> encode_config_area(const EscConfigArea& c) {
+  std::vector<uint8_t> out;
+  out.reserve(16);
+  le::put16(out, c.pdi_control);
+  le::put16(out, c.pdi_config);
+  le::put16(out, c.sync_impulse_length);
+  le::put16(out, c.extended_pdi_config);
+  le::put16(out, c.station_alias);
+  le::put16(out, 0);  // reserved
+  le::put16(out, 0);  // reserved
+  // Word 7: CRC in the low byte, high byte 0 (ETG.2010 Table 2).
+  le::put16(out, sii_crc8(std::span<const uint8_t>(out.data(), 14)));
+  return out;
+}
+
+SiiImage encode_sii(const DeviceDescription& d) {
+  std::vector<uint8_t> image = encode_config_area(d.config);
+  image.resize(sii::kFirstCategory * 2u, 0);
+
+  auto word = [&](uint16_t address, uint16_t value) { le::store16(image, 2u * address, value); };
+  auto dword = [&](uint16_t address, uint32_t value) { le::store32(image, 2u * address, value); };
+  dword(sii::kVendorId, d.vendor_id);
+  dword(sii::kProductCode, d.product_code);
+  dword(sii::kRevision, d.revision);
+  dword(sii::kSerial, d.serial);
+
+  // The mailbox words come from the SMs typed as mailboxes. The device has no separate
+  // bootstrap firmware (no BOOT state), so the bootstrap mailbox is the standard one.
+  const auto* rx = find_sm(d, SmType::MailboxOut);
+  const auto* tx = find_sm(d, SmType::MailboxIn);
+  if (rx && tx) {
+    word(sii::kBootstrapReceiveOffset, rx->start);
+    word(sii::kBootstrapReceiveSize, rx->default_size);
+    word(sii::kBootstrapSendOffset, tx->start);
+    word(sii::kBootstrapSendSize, tx->default_size);
+    word(sii::kStandardReceiveOffset, rx->start);
+    word(sii::kStandardReceiveSize, rx->default_size);
+    word(sii::kStandardSendOffset, tx->start);
+    word(sii::kStandardSendSize, tx->default_size);
+    word(sii::kMailboxProtocol, d.coe.sdo ? sii::kProtoCoE : 0);
+  }
+  word(sii::kVersion, 1);
+
+  StringTable strings;
+  // Intern in display order so the device's own names get the first indices.
+  strings.intern(d.device_name);
+  auto general = encode_general(d, strings);
+  auto fmmu = encode_fmmus(d);
+  auto sm = encode_sms(d);
+  auto dc = encode_dc(d, strings);
+  auto txpdo = encode_pdos(d.tx_pdos, strings);
+  auto rxpdo = encode_pdos(d.rx_pdos, strings);
+
+  append_category(image, sii::kCatStrings, strings.encode());
+  append_category(image, sii::kCatGeneral, std::move(general));
+  if (!fmmu.empty()) append_category(image, sii::kCatFmmu, std::move(fmmu));
+  if (!sm.empty()) append_category(image, sii::kCatSyncManager, std::move(sm));
+  if (!txpdo.empty()) append_category(image, sii::kCatTxPdo, std::move(txpdo));
+  if (!rxpdo.empty()) append_category(image, sii::kCatRxPdo, std::move(rxpdo));
+  if (!dc.empty()) append_category(image, sii::kCatDc, std::move(dc));
+  le::put16(image, sii::kCatEnd);
+
+  if (image.size() > sii::kMaxBytes) {
+    throw SiiEncodeError("SII image needs " + std::to_string(image.size()) +
+                         " bytes, more than the " + std::to_string(sii::kMaxBytes) +
+                         " bytes a master can address");
+  }
+  // Round up to an EEPROM size (a power of two), erased cells read 0xFF. Word 0x3E holds the
+  // size in Kbit minus one (ETG.2010 Table 2: 0 = 1 Kbit ... 15 = 16 Kbit).
+  size_t size = std::max(sii::kMinBytes, std::bit_ceil(image.size()));
+  image.resize(size, 0xFF);
+  word(sii::kSize, static_cast<uint16_t>(size * 8 / 1024 - 1));
+  return SiiImage{std::move(image)};
+}
+
+}  // namespace rackcat::esi
