@@ -1,0 +1,248 @@
+// The master side of the wire benchmark (scripts/wire_bench.py): sends EtherCAT frames from
+// a raw socket, one at a time, and measures each round trip until the reply (the same frame
+// with bit 0x02 of the first source-MAC byte set, ETG.1000.4 §5.1) comes back.
+//
+//   wire_pinger --iface IFACE --frame brd|lrw [--count N] [--slaves N] [--lrw-bytes B]
+//               [--busy-poll] [--setup-fmmu] [--warmup N]
+//
+// --setup-fmmu first maps B bytes of logical space per slave onto each slave's process RAM
+// (FMMU0, read/write, APWR by position) so that LRW exercises the FMMU path of a real slave.
+// Prints one line of JSON: {"frame":..,"count":..,"lost":..,"p50_us":..,"p90_us":..,
+// "p99_us":..,"min_us":..,"max_us":..,"wkc":..}. Exit code 2 on setup errors.
+#include <arpa/inet.h>
+#include <linux/if_ether.h>
+#include <linux/if_packet.h>
+#include <net/if.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <unistd.h>
+#include <algorithm>
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <string>
+#include <vector>
+
+namespace {
+
+constexpr uint16_t kEtherTypeEcat = 0x88A4;
+constexpr uint8_t kCmdApwr = 0x02;
+constexpr uint8_t kCmdBrd = 0x07;
+constexpr uint8_t kCmdLrw = 0x0C;
+constexpr int kTimeoutNs = 10'000'000;
+
+uint64_t now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<uint64_t>(ts.tv_nsec);
+}
+
+void put16(uint8_t* p, uint16_t v) {
+  p[0] = static_cast<uint8_t>(v);
+  p[1] = static_cast<uint8_t>(v >> 8);
+}
+void put32(uint8_t* p, uint32_t v) {
+  put16(p, static_cast<uint16_t>(v));
+  put16(p + 2, static_cast<uint16_t>(v >> 16));
+}
+uint16_t get16(const uint8_t* p) {
+  return static_cast<uint16_t>(p[0] | (p[1] << 8));
+}
+
+struct Frame {
+  std::vector<uint8_t> bytes;
+  size_t wkc_offset = 0;
+};
+
+// Ethernet + EtherCAT header + one datagram (ETG.1000.4 §5.2) + padding to the 60-byte
+// Ethernet minimum.
+Frame build_frame(const uint8_t* src_mac, uint8_t cmd, uint16_t adp, uint16_t ado,
+                  const std::vector<uint8_t>& data) {
+  Frame f;
+  const size_t dgram = 10 + data.size() + 2;
+  f.bytes.assign(std::max<size_t>(14 + 2 + dgram, 60), 0);
+  uint8_t* p = f.bytes.data();
+  std::memset(p, 0xFF, 6);
+  std::memcpy(p + 6, src_mac, 6);
+  p[12] = kEtherTypeEcat >> 8;
+  p[13] = kEtherTypeEcat & 0xFF;
+  put16(p + 14, static_cast<uint16_t>(dgram | (1u << 12)));  // length, type 1 (datagrams)
+  uint8_t* d = p + 16;
+  d[0] = cmd;
+  d[1] = 0;  // index, set per frame
+  put16(d + 2, adp);
+  put16(d + 4, ado);
+  put16(d + 6, static_cast<uint16_t>(data.size()));
+  put16(d + 8, 0);
+  std::memcpy(d + 10, data.data(), data.size());
+  f.wkc_offset = 16 + 10 + data.size();
+  return f;
+}
+
+struct Socket {
+  int fd = -1;
+  uint8_t mac[6]{};
+  bool busy = false;
+};
+
+// Sends the frame and waits for its reply. Returns the round trip in ns, or -1 on timeout.
+int64_t round_trip(Socket& s, Frame& f, uint8_t index, uint16_t& wkc_out) {
+  f.bytes[17] = index;
+  static uint8_t rx[2048];
+  const uint64_t t0 = now_ns();
+  if (send(s.fd, f.bytes.data(), f.bytes.size(), 0) < 0) return -1;
+  for (;;) {
+    ssize_t n;
+    if (s.busy) {
+      n = recv(s.fd, rx, sizeof(rx), MSG_DONTWAIT);
+      if (n < 0) {
+        if (now_ns() - t0 > static_cast<uint64_t>(kTimeoutNs)) return -1;
+        continue;
+      }
+    } else {
+      const uint64_t elapsed = now_ns() - t0;
+      if (elapsed > static_cast<uint64_t>(kTimeoutNs)) return -1;
+      pollfd pfd{s.fd, POLLIN, 0};
+      timespec left{0, static_cast<long>(kTimeoutNs - elapsed)};
+      if (ppoll(&pfd, 1, &left, nullptr) <= 0) continue;
+      n = recv(s.fd, rx, sizeof(rx), MSG_DONTWAIT);
+      if (n < 0) continue;
+    }
+    const uint64_t t1 = now_ns();
+    // A reply: our frame with the ESC's source-MAC bit set and the same datagram index.
+    if (n >= static_cast<ssize_t>(f.bytes.size()) && (rx[6] & 0x02) && rx[17] == index &&
+        std::memcmp(rx + 7, s.mac + 1, 5) == 0) {
+      wkc_out = get16(rx + f.wkc_offset);
+      return static_cast<int64_t>(t1 - t0);
+    }
+  }
+}
+
+double percentile(std::vector<int64_t>& v, double p) {
+  if (v.empty()) return 0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(p / 100.0 * (v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return static_cast<double>(v[k]) / 1000.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string iface;
+  std::string kind = "brd";
+  int count = 10000;
+  int warmup = 200;
+  int slaves = 1;
+  int lrw_bytes = 8;
+  bool busy = false;
+  bool setup_fmmu = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
+    if (a == "--iface")
+      iface = next();
+    else if (a == "--frame")
+      kind = next();
+    else if (a == "--count")
+      count = std::atoi(next().c_str());
+    else if (a == "--warmup")
+      warmup = std::atoi(next().c_str());
+    else if (a == "--slaves")
+      slaves = std::atoi(next().c_str());
+    else if (a == "--lrw-bytes")
+      lrw_bytes = std::atoi(next().c_str());
+    else if (a == "--busy-poll")
+      busy = true;
+    else if (a == "--setup-fmmu")
+      setup_fmmu = true;
+    else {
+      std::fprintf(stderr, "wire_pinger: unknown argument %s\n", a.c_str());
+      return 2;
+    }
+  }
+  if (iface.empty() || (kind != "brd" && kind != "lrw") || count <= 0 || slaves <= 0 ||
+      lrw_bytes <= 0 || lrw_bytes > 1024) {
+    std::fprintf(stderr, "wire_pinger: bad arguments\n");
+    return 2;
+  }
+  Socket s;
+  s.busy = busy;
+  s.fd = socket(AF_PACKET, SOCK_RAW, 0);
+  if (s.fd < 0) {
+    std::fprintf(stderr, "wire_pinger: socket: %s\n", std::strerror(errno));
+    return 2;
+  }
+  ifreq ifr{};
+  std::snprintf(ifr.ifr_name, sizeof(ifr.ifr_name), "%s", iface.c_str());
+  if (ioctl(s.fd, SIOCGIFINDEX, &ifr) < 0) {
+    std::fprintf(stderr, "wire_pinger: no such network interface: %s\n", iface.c_str());
+    return 2;
+  }
+  const int ifindex = ifr.ifr_ifindex;
+  if (ioctl(s.fd, SIOCGIFHWADDR, &ifr) < 0) return 2;
+  std::memcpy(s.mac, ifr.ifr_hwaddr.sa_data, 6);
+  int one = 1;
+  (void)setsockopt(s.fd, SOL_PACKET, PACKET_IGNORE_OUTGOING, &one, sizeof(one));
+  (void)setsockopt(s.fd, SOL_PACKET, PACKET_QDISC_BYPASS, &one, sizeof(one));
+  sockaddr_ll addr{};
+  addr.sll_family = AF_PACKET;
+  addr.sll_protocol = htons(kEtherTypeEcat);
+  addr.sll_ifindex = ifindex;
+  if (bind(s.fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) < 0) {
+    std::fprintf(stderr, "wire_pinger: bind: %s\n", std::strerror(errno));
+    return 2;
+  }
+
+  uint16_t wkc = 0;
+  if (setup_fmmu) {
+    // FMMU0 (0x0600, ETG.1000.4 Table 57): logical start, length, start bit 0, stop bit 7,
+    // physical 0x1000, physical start bit 0, type read+write (3), activate.
+    for (int pos = 0; pos < slaves; ++pos) {
+      std::vector<uint8_t> fmmu(16, 0);
+      put32(fmmu.data(), static_cast<uint32_t>(pos * lrw_bytes));
+      put16(fmmu.data() + 4, static_cast<uint16_t>(lrw_bytes));
+      fmmu[6] = 0;
+      fmmu[7] = 7;
+      put16(fmmu.data() + 8, 0x1000);
+      fmmu[10] = 0;
+      fmmu[11] = 3;
+      fmmu[12] = 1;
+      Frame f = build_frame(s.mac, kCmdApwr, static_cast<uint16_t>(-pos), 0x0600, fmmu);
+      if (round_trip(s, f, 0xF0, wkc) < 0) {
+        std::fprintf(stderr, "wire_pinger: no answer to FMMU setup of slave %d\n", pos);
+        return 1;
+      }
+    }
+  }
+
+  Frame f = kind == "brd"
+                ? build_frame(s.mac, kCmdBrd, 0, 0x0000, std::vector<uint8_t>(2, 0))
+                : build_frame(s.mac, kCmdLrw, 0, 0,
+                              std::vector<uint8_t>(static_cast<size_t>(lrw_bytes * slaves), 0x5A));
+  std::vector<int64_t> samples;
+  samples.reserve(static_cast<size_t>(count));
+  int lost = 0;
+  for (int i = 0; i < warmup + count; ++i) {
+    const int64_t rtt = round_trip(s, f, static_cast<uint8_t>(i & 0x7F), wkc);
+    if (i < warmup) continue;
+    if (rtt < 0) {
+      ++lost;
+      continue;
+    }
+    samples.push_back(rtt);
+  }
+  std::vector<int64_t> sorted = samples;
+  std::sort(sorted.begin(), sorted.end());
+  const double mn = sorted.empty() ? 0 : static_cast<double>(sorted.front()) / 1000.0;
+  const double mx = sorted.empty() ? 0 : static_cast<double>(sorted.back()) / 1000.0;
+  std::printf(
+      "{\"frame\":\"%s\",\"count\":%zu,\"lost\":%d,\"p50_us\":%.2f,\"p90_us\":%.2f,"
+      "\"p99_us\":%.2f,\"min_us\":%.2f,\"max_us\":%.2f,\"wkc\":%u}\n",
+      kind.c_str(), samples.size(), lost, percentile(sorted, 50), percentile(sorted, 90),
+      percentile(sorted, 99), mn, mx, wkc);
+  close(s.fd);
+  return 0;
+}

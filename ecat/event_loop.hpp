@@ -1,0 +1,106 @@
+// The slave's main loop: one thread that receives a frame, lets the segment process it in
+// place, sends the reply, and in between fires the time-driven events of the ESCs (SYNC0/
+// SYNC1 pulses at the distributed-clock times, process-data watchdog expiry).
+//
+//   frame in -> pcap -> FrameHandler (in place) -> pcap -> frame out
+//
+// Other threads (a control API) run code on the loop thread with post(); SIGINT and SIGTERM
+// end run() cleanly with status 0. Two wait modes (WaitMode): Blocking sleeps in ppoll() on
+// the socket, an eventfd for post()/stop(), a signalfd, and the next timer deadline as the
+// timeout; BusyPoll spins on non-blocking receives and checks the clock between them.
+//
+// The cyclic path allocates nothing: the frame is the link's fixed buffer, the handlers are
+// set once, and post() allocates only on the posting thread.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <span>
+#include <vector>
+
+#include "ecat/raw_socket_link.hpp"
+
+namespace rackcat::ecat {
+
+class PcapWriter;
+
+// Time-driven work of the slaves, in CLOCK_MONOTONIC nanoseconds (monotonic_ns()).
+class TimerSource {
+ public:
+  virtual ~TimerSource() = default;
+  // The earliest time something is due, or kNever. Asked after every frame and every
+  // on_time(); must be cheap (a few comparisons).
+  virtual uint64_t next_deadline_ns() const = 0;
+  // Fire everything due at or before now_ns (SYNC pulses, watchdog expiry).
+  virtual void on_time(uint64_t now_ns) = 0;
+
+  static constexpr uint64_t kNever = UINT64_MAX;
+};
+
+uint64_t monotonic_ns();
+
+class EventLoop {
+ public:
+  // Processes one received frame in place. Returns the reply length to send (normally the
+  // frame's own length), or 0 to send nothing.
+  using FrameHandler = std::function<size_t(std::span<uint8_t> frame)>;
+
+  struct Options {
+    WaitMode wait = WaitMode::Blocking;
+    PcapWriter* pcap = nullptr;   // not owned; flushed when run() returns
+    bool stop_on_signals = true;  // SIGINT/SIGTERM end run()
+  };
+
+  // Blocks SIGINT and SIGTERM in the calling thread so that they are delivered through the
+  // loop's signalfd. Call it in main() before starting other threads (they inherit the mask);
+  // the constructor calls it for the constructing thread too.
+  static void block_stop_signals();
+
+  EventLoop(RawSocketLink& link, Options options);
+  ~EventLoop();
+  EventLoop(const EventLoop&) = delete;
+  EventLoop& operator=(const EventLoop&) = delete;
+
+  void set_frame_handler(FrameHandler handler) { on_frame_ = std::move(handler); }
+  void set_timer_source(TimerSource* source) { timers_ = source; }
+
+  // Runs until stop() or SIGINT/SIGTERM. Returns 0 on a clean stop, 1 when the loop could
+  // not wait (a failing system call). Runs on the calling thread.
+  int run();
+
+  // Thread-safe (and safe from the loop thread itself).
+  void post(std::function<void()> fn);
+  void stop();
+
+  bool running() const { return running_.load(std::memory_order_relaxed); }
+  int stop_signal() const { return stop_signal_; }  // the signal that ended run(), or 0
+  uint64_t frames_handled() const { return frames_; }
+
+ private:
+  void handle_frame(std::span<uint8_t> frame);
+  void run_posted();
+  bool drain_signals();  // true when a stop signal arrived
+  void fire_timers(uint64_t now);
+  int run_blocking();
+  int run_busy_poll();
+
+  RawSocketLink& link_;
+  Options options_;
+  FrameHandler on_frame_;
+  TimerSource* timers_ = nullptr;
+  int event_fd_ = -1;
+  int signal_fd_ = -1;
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<bool> posted_pending_{false};
+  std::atomic<bool> running_{false};
+  int stop_signal_ = 0;
+  uint64_t frames_ = 0;
+  std::mutex posted_mutex_;
+  std::vector<std::function<void()>> posted_;
+  std::vector<std::function<void()>> running_posted_;
+};
+
+}  // namespace rackcat::ecat

@@ -1,0 +1,132 @@
+// EventLoop: frame in -> handler in place -> frame out (and both in the pcap), post() from
+// other threads, timer deadlines, and a clean stop on SIGTERM. On the loopback interface;
+// skipped without CAP_NET_RAW.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <csignal>
+#include <fstream>
+#include <iterator>
+#include <thread>
+
+#include "ecat/event_loop.hpp"
+#include "ecat/pcap_writer.hpp"
+#include "ecat/raw_socket_link.hpp"
+#include "tests/ecat/link_test_util.hpp"
+
+namespace rackcat::ecat {
+namespace {
+
+class LinkEventLoop : public ::testing::TestWithParam<WaitMode> {
+ protected:
+  void SetUp() override {
+    if (!testutil::can_open_raw_socket()) GTEST_SKIP() << "needs root or CAP_NET_RAW";
+  }
+};
+
+// Answers like an ESC (source-MAC bit 0x02 set, tag byte incremented). Frames that already
+// carry the bit are our own replies looping back on lo: no answer.
+size_t answer(std::span<uint8_t> frame) {
+  if (frame[6] & 0x02) return 0;
+  frame[6] |= 0x02;
+  frame[testutil::kFirstDataByte] += 1;
+  return frame.size();
+}
+
+TEST_P(LinkEventLoop, AnswersFramesInPlaceAndRecordsBothDirections) {
+  const std::string pcap_path =
+      ::testing::TempDir() + "rackcat_loop_" + std::to_string(getpid()) + ".pcap";
+  RawSocketLink link("lo");
+  PcapWriter pcap(pcap_path);
+  EventLoop loop(link, {.wait = GetParam(), .pcap = &pcap, .stop_on_signals = false});
+  loop.set_frame_handler(answer);
+
+  std::vector<uint8_t> reply;
+  std::thread master([&] {
+    RawSocketLink master_link("lo");
+    const auto frame = testutil::ethercat_frame(0x50);
+    master_link.send(frame);
+    reply = testutil::receive_matching(master_link, [](std::span<const uint8_t> f) {
+      return (f[6] & 0x02) && f[testutil::kFirstDataByte] == 0x51;
+    });
+    loop.stop();
+  });
+  EXPECT_EQ(loop.run(), 0);
+  master.join();
+  ASSERT_EQ(reply.size(), 60u);
+  EXPECT_EQ(reply[6], 0x02);
+  EXPECT_EQ(reply[testutil::kFirstDataByte], 0x51);
+
+  std::ifstream f(pcap_path, std::ios::binary);
+  const std::vector<uint8_t> bytes{std::istreambuf_iterator<char>(f),
+                                   std::istreambuf_iterator<char>()};
+  // First record: the frame as received; second: the reply as sent.
+  ASSERT_GE(bytes.size(), 24u + 2 * (16u + 60u));
+  EXPECT_EQ(bytes[24 + 16 + 6], 0x00);
+  EXPECT_EQ(bytes[24 + 16 + testutil::kFirstDataByte], 0x50);
+  EXPECT_EQ(bytes[24 + 76 + 16 + 6], 0x02);
+  EXPECT_EQ(bytes[24 + 76 + 16 + testutil::kFirstDataByte], 0x51);
+  std::remove(pcap_path.c_str());
+}
+
+TEST_P(LinkEventLoop, PostedWorkRunsOnTheLoopThread) {
+  RawSocketLink link("lo");
+  EventLoop loop(link, {.wait = GetParam(), .pcap = nullptr, .stop_on_signals = false});
+  std::thread::id ran_on;
+  std::atomic<int> runs{0};
+  std::thread other([&] {
+    for (int i = 0; i < 100; ++i) loop.post([&] { runs.fetch_add(1); });
+    loop.post([&] {
+      ran_on = std::this_thread::get_id();
+      loop.stop();
+    });
+  });
+  EXPECT_EQ(loop.run(), 0);
+  other.join();
+  EXPECT_EQ(runs.load(), 100);
+  EXPECT_EQ(ran_on, std::this_thread::get_id());
+}
+
+class OneShotTimer : public TimerSource {
+ public:
+  OneShotTimer(EventLoop& loop, uint64_t at) : loop_(loop), at_(at) {}
+  uint64_t next_deadline_ns() const override { return fired_at_ ? kNever : at_; }
+  void on_time(uint64_t now) override {
+    fired_at_ = now;
+    loop_.stop();
+  }
+  uint64_t fired_at() const { return fired_at_; }
+
+ private:
+  EventLoop& loop_;
+  uint64_t at_;
+  uint64_t fired_at_ = 0;
+};
+
+TEST_P(LinkEventLoop, TimerSourceFiresAtItsDeadlineNotBefore) {
+  RawSocketLink link("lo");
+  EventLoop loop(link, {.wait = GetParam(), .pcap = nullptr, .stop_on_signals = false});
+  const uint64_t deadline = monotonic_ns() + 3'000'000;
+  OneShotTimer timer(loop, deadline);
+  loop.set_timer_source(&timer);
+  EXPECT_EQ(loop.run(), 0);
+  EXPECT_GE(timer.fired_at(), deadline);
+}
+
+TEST_P(LinkEventLoop, SigtermStopsTheLoopWithStatusZero) {
+  RawSocketLink link("lo");
+  EventLoop loop(link, {.wait = GetParam(), .pcap = nullptr, .stop_on_signals = true});
+  // The signal is blocked in this (only) thread and read from the loop's signalfd.
+  loop.post([] { kill(getpid(), SIGTERM); });
+  EXPECT_EQ(loop.run(), 0);
+  EXPECT_EQ(loop.stop_signal(), SIGTERM);
+}
+
+INSTANTIATE_TEST_SUITE_P(BothWaitModes, LinkEventLoop,
+                         ::testing::Values(WaitMode::Blocking, WaitMode::BusyPoll),
+                         [](const auto& info) {
+                           return info.param == WaitMode::Blocking ? "Blocking" : "BusyPoll";
+                         });
+
+}  // namespace
+}  // namespace rackcat::ecat

@@ -1,0 +1,90 @@
+// PcapWriter: files in the classic libpcap format (tcpdump.org "pcap savefile format":
+// 24-byte global header, 16-byte record headers), which Wireshark and tshark open.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "ecat/pcap_writer.hpp"
+
+namespace rackcat::ecat {
+namespace {
+
+std::string temp_path(const char* name) {
+  return ::testing::TempDir() + "rackcat_" + std::to_string(getpid()) + "_" + name;
+}
+
+std::vector<uint8_t> read_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+TEST(LinkPcap, GlobalHeaderIsNanosecondEthernet) {
+  const auto path = temp_path("header.pcap");
+  { PcapWriter w(path); }
+  const auto bytes = read_file(path);
+  // Magic 0xA1B23C4D (nanosecond resolution) little-endian, version 2.4, thiszone 0,
+  // sigfigs 0, snaplen 65535, network 1 (LINKTYPE_ETHERNET).
+  const std::vector<uint8_t> expected = {0x4D, 0x3C, 0xB2, 0xA1, 0x02, 0x00, 0x04, 0x00,
+                                         0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+                                         0xFF, 0xFF, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00};
+  EXPECT_EQ(bytes, expected);
+  std::remove(path.c_str());
+}
+
+TEST(LinkPcap, RecordCarriesTimestampLengthsAndBytes) {
+  const auto path = temp_path("record.pcap");
+  const std::vector<uint8_t> frame = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x02, 0x00,
+                                      0x00, 0x00, 0x00, 0x01, 0x88, 0xA4, 0x0E, 0x10};
+  {
+    PcapWriter w(path);
+    // 2026-01-02 03:04:05.000000123 UTC = 1767323045 s + 123 ns.
+    w.write(frame, 1767323045ull * 1000000000ull + 123);
+    EXPECT_EQ(w.frames_written(), 1u);
+  }
+  const auto bytes = read_file(path);
+  ASSERT_EQ(bytes.size(), 24u + 16u + frame.size());
+  const std::vector<uint8_t> record_header(bytes.begin() + 24, bytes.begin() + 40);
+  // ts_sec 1767323045 = 0x695735A5, ts_nsec 123, incl_len 16, orig_len 16.
+  const std::vector<uint8_t> expected = {0xA5, 0x35, 0x57, 0x69, 0x7B, 0x00, 0x00, 0x00,
+                                         0x10, 0x00, 0x00, 0x00, 0x10, 0x00, 0x00, 0x00};
+  EXPECT_EQ(record_header, expected);
+  EXPECT_EQ(std::vector<uint8_t>(bytes.begin() + 40, bytes.end()), frame);
+  std::remove(path.c_str());
+}
+
+TEST(LinkPcap, BufferedRecordsReachTheFileOnFlushAndInOrder) {
+  const auto path = temp_path("buffered.pcap");
+  PcapWriter w(path, 4096);
+  std::vector<uint8_t> frame(60, 0);
+  for (int i = 0; i < 200; ++i) {  // 200 x 76 bytes: several buffer refills
+    frame[0] = static_cast<uint8_t>(i);
+    w.write(frame, 1'000'000'000ull * 1700000000ull + static_cast<uint64_t>(i));
+  }
+  ASSERT_TRUE(w.flush());
+  const auto bytes = read_file(path);
+  ASSERT_EQ(bytes.size(), 24u + 200u * (16u + 60u));
+  for (int i = 0; i < 200; ++i) {
+    const size_t rec = 24 + static_cast<size_t>(i) * 76;
+    EXPECT_EQ(bytes[rec + 4], static_cast<uint8_t>(i));   // ts_nsec low byte
+    EXPECT_EQ(bytes[rec + 16], static_cast<uint8_t>(i));  // first frame byte
+  }
+  w.close();
+  std::remove(path.c_str());
+}
+
+TEST(LinkPcap, UnwritablePathIsAnErrorNamingTheFile) {
+  try {
+    PcapWriter w("/nonexistent-dir/x.pcap");
+    FAIL() << "expected an exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/x.pcap"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace rackcat::ecat
