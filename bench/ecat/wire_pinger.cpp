@@ -3,12 +3,13 @@
 // with bit 0x02 of the first source-MAC byte set, ETG.1000.4 §5.1) comes back.
 //
 //   wire_pinger --iface IFACE --frame brd|lrw [--count N] [--slaves N] [--lrw-bytes B]
-//               [--busy-poll] [--setup-fmmu] [--warmup N]
+//               [--busy-poll] [--setup-fmmu] [--warmup N] [--samples-out FILE]
 //
 // --setup-fmmu first maps B bytes of logical space per slave onto each slave's process RAM
 // (FMMU0, read/write, APWR by position) so that LRW exercises the FMMU path of a real slave.
 // Prints one line of JSON: {"frame":..,"count":..,"lost":..,"p50_us":..,"p90_us":..,
-// "p99_us":..,"min_us":..,"max_us":..,"wkc":..}. Exit code 2 on setup errors.
+// "p99_us":..,"min_us":..,"max_us":..,"wkc":..}; --samples-out also writes every round trip
+// (ns, one per line) so several runs can be pooled. Exit code 2 on setup errors.
 #include <arpa/inet.h>
 #include <linux/if_ether.h>
 #include <linux/if_packet.h>
@@ -139,6 +140,7 @@ int main(int argc, char** argv) {
   int lrw_bytes = 8;
   bool busy = false;
   bool setup_fmmu = false;
+  std::string samples_out;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
@@ -158,6 +160,8 @@ int main(int argc, char** argv) {
       busy = true;
     else if (a == "--setup-fmmu")
       setup_fmmu = true;
+    else if (a == "--samples-out")
+      samples_out = next();
     else {
       std::fprintf(stderr, "wire_pinger: unknown argument %s\n", a.c_str());
       return 2;
@@ -233,6 +237,15 @@ int main(int argc, char** argv) {
       continue;
     }
     samples.push_back(rtt);
+  }
+  if (!samples_out.empty()) {
+    FILE* out = std::fopen(samples_out.c_str(), "w");
+    if (out == nullptr) {
+      std::fprintf(stderr, "wire_pinger: cannot write %s\n", samples_out.c_str());
+      return 2;
+    }
+    for (const int64_t v : samples) std::fprintf(out, "%lld\n", static_cast<long long>(v));
+    std::fclose(out);
   }
   std::vector<int64_t> sorted = samples;
   std::sort(sorted.begin(), sorted.end());
