@@ -590,13 +590,13 @@ async fn check_coe<'a>(
                         .map(|m| format!("{m:#06x}"))
                         .collect();
                     r.check(
-                        missing.is_empty() && list.len() == usize::from(q.all),
+                        missing.is_empty(),
                         format!(
-                            "{tag}: SDO info object list has {} objects (quantities say {}), missing mandatory: {missing:?}",
-                            list.len(),
-                            q.all
+                            "{tag}: ethercrab's SDO info object list ({} objects) has the mandatory objects (missing: {missing:?})",
+                            list.len()
                         ),
                     );
+                    compare_od_lists(&tag, md, sd, info, &list, q.all, r).await;
                 }
                 Ok(None) => r.fail(format!("{tag}: SDO info object list: no mailbox")),
                 Err(e) => r.fail(format!("{tag}: SDO info object list: {}", sdo_err(&e))),
@@ -609,6 +609,80 @@ async fn check_coe<'a>(
         )),
     }
     layout_ok.then_some(layout)
+}
+
+/// Checks the object list against an independent raw "Get OD List" and the object count.
+/// ethercrab 0.7.1 subtracts the 2-byte list type from the length of every fragment, not
+/// only the first, so it loses the last index of each later fragment: that difference is
+/// reported as ethercrab's, not held against the slave.
+async fn compare_od_lists<'a>(
+    tag: &str,
+    md: &'a MainDevice<'a>,
+    sd: &SubDeviceRef<'a, &'a SubDevice>,
+    info: &SiiInfo,
+    ethercrab_list: &[u16],
+    count_all: u16,
+    r: &mut Report,
+) {
+    let rx_sm = info.sm_of_kind(1).unwrap_or(0) as u8;
+    let tx_sm = info.sm_of_kind(2).unwrap_or(1) as u8;
+    let sub: &SubDevice = sd;
+    let fragments = match RawMailbox::open(md, sd.configured_address(), rx_sm, tx_sm).await {
+        Ok(mut mbx) => mbx.od_list(sub, 1).await,
+        Err(e) => Err(e),
+    };
+    let fragments = match fragments {
+        Ok(f) => f,
+        Err(e) => {
+            r.fail(format!("{tag}: raw Get OD List (all objects): {e}"));
+            return;
+        }
+    };
+    let full: Vec<u16> = fragments.iter().flatten().copied().collect();
+    r.check(
+        full.len() == usize::from(count_all),
+        format!(
+            "{tag}: Get OD List has {} objects in {} fragment(s), list lengths say {count_all}",
+            full.len(),
+            fragments.len()
+        ),
+    );
+    let mut sorted = full.clone();
+    sorted.sort_unstable();
+    sorted.dedup();
+    r.check(
+        sorted.len() == full.len(),
+        format!("{tag}: Get OD List has no duplicate index"),
+    );
+    if ethercrab_list == full.as_slice() {
+        r.pass(format!("{tag}: ethercrab's object list equals the raw one"));
+        return;
+    }
+    let truncated: Vec<u16> = fragments
+        .iter()
+        .enumerate()
+        .flat_map(|(k, f)| {
+            let keep = if k == 0 {
+                f.len()
+            } else {
+                f.len().saturating_sub(1)
+            };
+            f[..keep].iter().copied()
+        })
+        .collect();
+    if ethercrab_list == truncated.as_slice() {
+        r.pass(format!("{tag}: ethercrab's object list equals the raw one less the last index of each later fragment"));
+        r.info(format!(
+            "{tag}: ethercrab 0.7.1 bug, not the slave's: it drops the last index of fragments 2..{} (it subtracts the list type from every fragment)",
+            fragments.len()
+        ));
+    } else {
+        r.fail(format!(
+            "{tag}: ethercrab's object list ({} entries) differs from the raw Get OD List ({} entries)",
+            ethercrab_list.len(),
+            full.len()
+        ));
+    }
 }
 
 /// Runs the cyclic exchange `cycles` times, driving and checking the loopback.

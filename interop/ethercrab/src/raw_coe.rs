@@ -21,6 +21,7 @@ const SDO_HEADER: usize = 16;
 const MAILBOX_TYPE_COE: u8 = 0x03;
 const COE_SDO_REQUEST: u16 = 2;
 const COE_SDO_RESPONSE: u16 = 3;
+const COE_SDO_INFO: u16 = 8;
 const RESPONSE_TIMEOUT: Duration = Duration::from_secs(1);
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -324,6 +325,113 @@ impl<'a> RawMailbox<'a> {
             segments += 1;
         }
         Ok(segments)
+    }
+
+    /// SDO Information "Get OD List" (ETG.1000.6 §5.6.3.3): one request, then as many
+    /// fragments as the slave announces. Returns the indices carried by each fragment (the
+    /// list type word, first in the first fragment only, is checked and left out).
+    pub async fn od_list(
+        &mut self,
+        sd: &SubDevice,
+        list_type: u16,
+    ) -> Result<Vec<Vec<u16>>, String> {
+        let mut req = Vec::with_capacity(8);
+        req.extend_from_slice(&(COE_SDO_INFO << 12).to_le_bytes());
+        req.extend_from_slice(&[0x01, 0x00, 0x00, 0x00]); // Get OD List request, no fragments
+        req.extend_from_slice(&list_type.to_le_bytes());
+        let mut body = self.exchange(sd, &req).await?;
+        let mut fragments = Vec::new();
+        let mut expected_left: Option<u16> = None;
+        loop {
+            if body.len() < 6 {
+                return Err(format!(
+                    "SDO info response of {} bytes: {body:02x?}",
+                    body.len()
+                ));
+            }
+            let service = u16::from_le_bytes([body[0], body[1]]) >> 12;
+            let opcode = body[2] & 0x7F;
+            let incomplete = body[2] & 0x80 != 0;
+            let left = u16::from_le_bytes([body[4], body[5]]);
+            if service != COE_SDO_INFO {
+                return Err(format!(
+                    "CoE service {service} in an SDO info exchange: {:02x?}",
+                    &body[..body.len().min(16)]
+                ));
+            }
+            if opcode == 0x07 {
+                let code = body
+                    .get(6..10)
+                    .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]));
+                return Err(format!(
+                    "SDO info error request: {}",
+                    code.map(abort_text).unwrap_or_default()
+                ));
+            }
+            if opcode != 0x02 {
+                return Err(format!(
+                    "SDO info opcode {opcode:#04x} (expected 0x02 Get OD List response)"
+                ));
+            }
+            if let Some(want) = expected_left {
+                if left != want {
+                    return Err(format!("fragments left {left}, expected {want}"));
+                }
+            }
+            let mut data = &body[6..];
+            if fragments.is_empty() {
+                if data.len() < 2 || u16::from_le_bytes([data[0], data[1]]) != list_type {
+                    return Err(format!(
+                        "first fragment does not start with list type {list_type}: {:02x?}",
+                        &data[..data.len().min(8)]
+                    ));
+                }
+                data = &data[2..];
+            }
+            if data.len() % 2 != 0 {
+                return Err(format!(
+                    "fragment {} carries an odd {} bytes",
+                    fragments.len(),
+                    data.len()
+                ));
+            }
+            fragments.push(
+                data.chunks_exact(2)
+                    .map(|c| u16::from_le_bytes([c[0], c[1]]))
+                    .collect(),
+            );
+            if !incomplete {
+                if left != 0 {
+                    return Err(format!("last fragment says {left} fragments left"));
+                }
+                return Ok(fragments);
+            }
+            if left == 0 {
+                return Err("fragment marked incomplete with 0 fragments left".to_string());
+            }
+            expected_left = Some(left - 1);
+            body = self.receive_more().await?;
+        }
+    }
+
+    /// Waits for the next unsolicited mailbox from the slave (a further fragment).
+    async fn receive_more(&mut self) -> Result<Vec<u8>, String> {
+        let deadline = Instant::now() + RESPONSE_TIMEOUT;
+        while self.sm_status(self.tx.sm).await? & 0x08 == 0 {
+            if Instant::now() > deadline {
+                return Err("next fragment did not arrive within 1 s".to_string());
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let resp = self.read_tx().await?;
+        let rlen = usize::from(u16::from_le_bytes([resp[0], resp[1]]));
+        if resp[5] & 0x0F != MAILBOX_TYPE_COE || rlen < 2 || 6 + rlen > resp.len() {
+            return Err(format!(
+                "unexpected mailbox {:02x?}",
+                &resp[..resp.len().min(16)]
+            ));
+        }
+        Ok(resp[6..6 + rlen].to_vec())
     }
 
     /// Upload; returns the data and the transfer type the slave chose.
