@@ -3,6 +3,7 @@
 // and its tests alike.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace rackcat::coe::sdo {

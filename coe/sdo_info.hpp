@@ -2,6 +2,7 @@
 // value-info bits of an entry description.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace rackcat::coe::sdo_info {

@@ -1,0 +1,95 @@
+// The request path allocates nothing after start-up: every service below runs with a global
+// operator new that counts (this file replaces it for the whole test binary).
+// GCC flags free() on memory from operator new; here both sides are ours and use malloc/free.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "tests/coe/sdo_fixture.hpp"
+
+namespace {
+std::atomic<long> g_allocations{0};
+}
+
+void* operator new(std::size_t n) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
+
+namespace rackcat::coe::test {
+namespace {
+
+TEST_F(SdoTest, RequestPathMakesNoHeapAllocation) {
+  // Every request framed up-front, into buffers allocated up-front.
+  std::vector<Bytes> requests;
+  uint8_t c = 0;
+  auto add = [&](uint8_t service, const Bytes& body) {
+    c = c >= 7 ? 1 : c + 1;
+    requests.push_back(coe_message(c, service, body));
+  };
+  add(2, upload_req(0x1018, 1));                // expedited upload
+  add(2, download_expedited(0x2000, 0, 9, 1));  // expedited download
+  add(2, upload_req(0x1008, 0));                // normal upload
+  add(2, upload_req(0x2002, 0));                // segmented upload
+  add(2, {0x60, 0, 0, 0, 0, 0, 0, 0});
+  add(2, {0x70, 0, 0, 0, 0, 0, 0, 0});
+  add(2, upload_req(0x1C12, 0, true));  // complete access
+  add(2, download_normal(0x1C12, 0, {1, 0, 0, 0x16}, true));
+  add(2, download_normal(0x2002, 0, Bytes(112, 'x'), false, 200));  // segmented download
+  add(2, Bytes(1 + 88, 0x01));
+  add(2, download_expedited(0x1018, 1, 1, 4));               // abort
+  add(2, download_expedited(0x2009, 0, 1, 1));               // hooks
+  add(8, {0x01, 0x00, 0x00, 0x00, 0x01, 0x00});              // OD list (fragmented)
+  add(8, {0x03, 0x00, 0x00, 0x00, 0x18, 0x10});              // object description
+  add(8, {0x05, 0x00, 0x00, 0x00, 0x18, 0x10, 0x01, 0x78});  // entry description
+  add(8, {0x03, 0x00, 0x00, 0x00, 0x34, 0x12});              // info error
+  add(5, {0x00});                                            // mailbox error
+  Bytes repeat = requests.front();
+  requests.push_back(repeat);
+  requests.push_back(repeat);  // repeat
+  int hooked = 0;
+  od.find(0x2009)->hooks.validate_write = [](const Object&, int, std::span<const uint8_t>,
+                                             EsmState) { return AbortCode::None; };
+  od.find(0x2009)->hooks.after_write = [&hooked](Object&, int) { ++hooked; };
+  Bytes reply(48);
+  std::vector<size_t> lengths;
+  lengths.reserve(requests.size() * 8);
+
+  const long before = g_allocations.load();
+  for (const Bytes& r : requests) {
+    lengths.push_back(server.handle(r, reply, EsmState::PreOp));
+    while (size_t n = server.poll(reply)) lengths.push_back(n);
+    server.queue_emergency(0x1000, 1);
+    lengths.push_back(server.poll(reply));
+  }
+  const long after = g_allocations.load();
+
+  EXPECT_EQ(after - before, 0);
+  EXPECT_EQ(hooked, 1);
+  for (size_t n : lengths) EXPECT_GT(n, 0u);
+}
+
+}  // namespace
+}  // namespace rackcat::coe::test
