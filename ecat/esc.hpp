@@ -1,0 +1,226 @@
+// One emulated EtherCAT slave controller (ESC), ET1100-class: a 64 KiB address space with the
+// registers 0x0000-0x0FFF behaving as ETG.1000.4 §6 and the Beckhoff ESC datasheet (section II)
+// describe them, process RAM 0x1000-0xFFFF, 16 FMMUs, 16 SyncManagers, the SII EEPROM
+// interface, distributed clocks and the AL state machine (ETG.1000.6 §5.3) that a µC-based
+// slave would run behind its PDI. docs/ESC.md is the one-page register model.
+//
+// The ESC never allocates on the datagram path. It is driven by a Segment (segment.hpp), which
+// hands it each datagram of each frame in line order; tests may drive it the same way.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "ecat/application.hpp"
+#include "ecat/clock.hpp"
+
+namespace rackcat::ecat {
+
+// Identification values the ESC reports (0x0000-0x0009) and SII interface options.
+struct EscOptions {
+  uint8_t type = 0x11;             // 0x0000: ET1100
+  uint8_t revision = 0x00;         // 0x0001
+  uint16_t build = 0x0002;         // 0x0002
+  uint8_t port_descriptor = 0x0F;  // 0x0007: ports 0 and 1 MII, ports 2 and 3 not implemented
+  // 0x0008: bit 2 DC, bit 3 64-bit DC, bit 8 enhanced DC SYNC activation; LRW and the
+  // read-write commands supported (bits 9, 10 clear); bit-granular FMMUs (bit 0 clear).
+  uint16_t features = 0x010C;
+  uint8_t sii_read_bytes = 8;  // 4 or 8: size of one SII read (0x0502 bit 6)
+  // Local time at power-up, so the slaves of a segment do not share a time origin (ETG.1000.4
+  // §9.1: each local clock starts at 0 when the ESC powers up).
+  uint64_t power_on_local_time_ns = 0;
+};
+
+// When the frame passed this ESC, in the clock's time base: used for the DC receive-time
+// latches (0x0900-0x091F) and for the system time a datagram reads.
+struct PassTimes {
+  uint64_t port0_ns = 0;  // first bit at port 0 (also the processing unit, 0x0918)
+  uint64_t port1_ns = 0;  // the same frame coming back at port 1
+};
+
+class Esc {
+ public:
+  static constexpr size_t kMemorySize = 0x10000;
+  static constexpr int kFmmus = 16;
+  static constexpr int kSyncManagers = 16;
+
+  // The application and the clock must outlive the ESC. The SII image is copied (the master
+  // may write it); the power-on EEPROM load (words 0-7, ETG.1000.4 §6.4.5) runs here.
+  Esc(Application& app, const Clock& clock, EscOptions options = {});
+  Esc(const Esc&) = delete;
+  Esc& operator=(const Esc&) = delete;
+
+  // ---- datagram path (called by Segment for every frame passing this ESC) -----------------
+  void begin_frame(const PassTimes& times) { pass_ = times; }
+  // One datagram passing this ESC: `datagram` points at its 10-byte header, followed by
+  // `data_len` data bytes and the 2-byte working counter. Addressing (ADP auto-increment),
+  // data and working counter are updated in place per ETG.1000.4 §5.4. The IRQ field is ORed
+  // with this ESC's masked ECAT event request (0x0210 & 0x0200).
+  void process_datagram(uint8_t* datagram, uint16_t data_len);
+  // The frame has left this ESC: the "µC" behind the PDI runs (AL control requests, mailbox
+  // hand-over, repeat requests), as it would between two frames.
+  void end_frame();
+  // A frame this ESC could not parse (chain past the end, bad length): counts it in the
+  // processing-unit and port-0 RX error counters (0x030C, 0x0300).
+  void count_frame_error();
+
+  // ---- timers: SYNC0/SYNC1 and the process-data watchdog -----------------------------------
+  // Fires every SYNC event due at `now_ns` (clock time base) and expires the process-data
+  // watchdog if its deadline passed. A SYNC unit that fell behind by several cycles fires
+  // once for the latest due pulse (a µC that missed interrupts sees one).
+  void service(uint64_t now_ns);
+  // Clock time of the next SYNC event or watchdog deadline; UINT64_MAX when none is pending.
+  uint64_t next_event_ns() const;
+  // Clock time of the next SYNC0/SYNC1 event; UINT64_MAX when that unit is not running.
+  uint64_t next_sync_event_ns() const;
+  // Raises a SYNC event now: Application::on_sync(which, system_time_ns), SYNC status
+  // 0x098E/0x098F and AL event bits 2/3. `which` is 0 or 1.
+  void fire_sync(int which, uint64_t system_time_ns);
+
+  // ---- port wiring (set by Segment) ----------------------------------------------------------
+  // Whether a cable with a live partner is on port 1 (port 0 always has the master side).
+  void set_port1_link(bool link);
+  // Whether frames leave through port 1 to the next slave: link present and the loop not
+  // closed by DL control 0x0101 (ETG.1000.4 §6.3.1: 11b = closed, 01b = auto-close).
+  bool forwards_to_port1() const;
+
+  // ---- observers (tests, CLI, the link) -------------------------------------------------------
+  AlState al_state() const { return state_; }
+  bool al_error() const;
+  uint16_t al_status_code() const;
+  uint16_t station_address() const;
+  uint64_t local_time(uint64_t clock_ns) const;
+  uint64_t system_time(uint64_t clock_ns) const;
+  // Raw view of the address space, no side effects (what a PDI read of the registers shows).
+  std::span<const uint8_t, kMemorySize> memory() const { return mem_; }
+  uint8_t read8(uint16_t address) const { return mem_[address]; }
+  uint16_t read16(uint16_t address) const;
+  uint32_t read32(uint16_t address) const;
+  uint64_t read64(uint16_t address) const;
+  // The SII EEPROM as the ESC holds it (initial image plus master writes), padded with 0xFF
+  // to the size declared in word 0x3E.
+  std::span<const uint8_t> eeprom() const { return sii_; }
+  Application& application() const { return app_; }
+
+ private:
+  struct SmState {
+    uint16_t start = 0;
+    uint16_t length = 0;
+    uint8_t control = 0;
+    bool enabled = false;         // ECAT activate bit (0x0806 bit 0) and a non-zero length
+    bool active = false;          // enabled and not deactivated by the PDI (0x0807 bit 0)
+    uint8_t next_buffer = 0;      // buffered mode: buffer index that receives the next write
+    bool repeat_request = false;  // last seen 0x0806 bit 1 (mailbox repeat, ETG.1000.4 §6.7.3)
+  };
+  struct FmmuState {
+    uint32_t logical_start = 0;
+    uint16_t length = 0;
+    uint8_t logical_start_bit = 0;
+    uint8_t logical_stop_bit = 7;
+    uint16_t physical_start = 0;
+    uint8_t physical_start_bit = 0;
+    uint8_t type = 0;  // bit 0 read, bit 1 write
+  };
+
+  // esc.cpp: reset, datagram dispatch, physical access.
+  void power_on_reset();
+  bool addressed_by_station(uint16_t adp) const;
+  bool physical_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge_or);
+  bool physical_write(uint16_t address, const uint8_t* src, uint16_t len);
+  uint8_t process_physical(uint8_t command, uint16_t address, uint8_t* data, uint16_t len,
+                           bool addressed);
+  // register_map.cpp: write masks and side effects of register accesses.
+  void write_registers(uint16_t address, const uint8_t* src, uint16_t len);
+  void after_register_write(uint16_t address, const uint8_t* src, uint16_t len);
+  void before_register_read(uint16_t address, uint16_t len);
+  void after_register_read(uint16_t address, uint16_t len);
+  // fmmu.cpp: logical addressing.
+  uint8_t process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len);
+  bool fmmu_read(const FmmuState& f, uint64_t lo_bit, uint64_t hi_bit, uint64_t datagram_bit0,
+                 uint8_t* data);
+  bool fmmu_write(const FmmuState& f, uint64_t lo_bit, uint64_t hi_bit, uint64_t datagram_bit0,
+                  const uint8_t* data);
+  void reload_fmmu(int index);
+  // sync_manager.cpp: buffer semantics.
+  void reload_sm(int index);
+  bool sm_allows_read(uint16_t address, uint16_t len);
+  void sm_after_read(uint16_t address, uint16_t len);
+  bool sm_allows_write(uint16_t address, uint16_t len);
+  void sm_after_write(uint16_t address, uint16_t len);
+  void sm_activation_written(int index, uint8_t old_activate);
+  void set_sm_pdi_deactivated(int index, bool deactivated);
+  void mailbox_service();
+  void update_ecat_events();
+  // sii.cpp: EEPROM interface.
+  void sii_load_image();
+  void sii_reload_config_area();
+  void sii_command(uint8_t control_lo, uint8_t command, bool control_lo_written);
+  // distributed_clock.cpp
+  void dc_latch_receive_times();
+  void dc_system_time_written(uint16_t address, const uint8_t* src, uint16_t len);
+  void dc_activation_written();
+  void dc_prepare_system_time_read();
+  uint64_t clock_of_system_time(uint64_t system_time) const;
+  // esm.cpp: the AL state machine.
+  void esm_control_written();
+  uint16_t esm_check_transition(AlState from, AlState to);
+  uint16_t esm_check_mailbox(bool bootstrap) const;
+  uint16_t esm_check_process_data() const;
+  uint16_t esm_check_dc() const;
+  void esm_enter(AlState to);
+  void esm_error(AlState stay_or_fall_to, uint16_t code);
+  void esm_write_status();
+  // watchdog.cpp
+  uint64_t watchdog_period_ns() const;
+  void watchdog_trigger(uint64_t now_ns);
+  void watchdog_expired();
+
+  Application& app_;
+  const Clock& clock_;
+  EscOptions options_;
+  std::array<uint8_t, kMemorySize> mem_{};
+  std::vector<uint8_t> sii_;
+  PassTimes pass_{};
+
+  std::array<SmState, kSyncManagers> sm_{};
+  uint16_t sm_enabled_mask_ = 0;
+  std::array<FmmuState, kFmmus> fmmu_{};
+  std::array<uint8_t, kFmmus> fmmu_active_{};  // indices of activated FMMUs, in order
+  uint8_t fmmu_active_count_ = 0;
+
+  bool port1_link_ = false;
+  uint8_t reset_sequence_ = 0;  // 0x0040 'R','E','S' progress
+
+  // ESM
+  AlState state_ = AlState::Init;
+  bool al_control_pending_ = false;
+  bool dc_synchronised_ = false;  // SYNC0 was running when SAFEOP was entered
+
+  // Mailbox (SM0 receive, SM1 send by ETG convention, validated by the ESM).
+  bool mailbox_work_ = false;
+  bool repeat_pending_ = false;
+  std::vector<uint8_t> last_reply_;
+  size_t last_reply_len_ = 0;
+  // SM2 outputs as last completed by the master: the consistent image on_outputs gets.
+  std::vector<uint8_t> outputs_;
+
+  // Distributed clocks: local(t) = t + local_offset_; system = local + 0x0920.
+  uint64_t local_offset_ = 0;
+  bool sync0_running_ = false;
+  bool sync1_running_ = false;
+  uint64_t next_sync0_ = 0;  // system time
+  uint64_t next_sync1_ = 0;  // system time
+  uint64_t sync0_count_ = 0;
+
+  // Process-data watchdog deadline (clock time), armed by SM2 writes with trigger enabled.
+  bool watchdog_armed_ = false;
+  uint64_t watchdog_deadline_ = 0;
+
+  // RW commands keep the incoming data here while the old memory is read into the datagram.
+  std::array<uint8_t, 2048> scratch_{};
+};
+
+}  // namespace rackcat::ecat

@@ -1,0 +1,214 @@
+// FMMUs: bit-granular mapping of the 4 GiB logical address space onto this ESC's physical
+// memory (ETG.1000.4 §6.6), and the logical datagrams LRD, LWR, LRW that use them.
+#include <algorithm>
+#include <cstring>
+
+#include "ecat/esc.hpp"
+#include "ecat/frame.hpp"
+#include "ecat/le.hpp"
+#include "ecat/registers.hpp"
+
+namespace rackcat::ecat {
+
+namespace {
+
+// Mask of the bits of logical byte `byte` that lie inside the bit range [lo, hi].
+inline uint8_t byte_mask(uint64_t byte, uint64_t lo, uint64_t hi) {
+  uint8_t mask = 0xFF;
+  if (byte == lo / 8) mask = static_cast<uint8_t>(mask & (0xFF << (lo % 8)));
+  if (byte == hi / 8) mask = static_cast<uint8_t>(mask & (0xFF >> (7 - hi % 8)));
+  return mask;
+}
+
+struct Span {
+  uint64_t lo = 0;          // first logical bit mapped and inside the datagram
+  uint64_t hi = 0;          // last one
+  int64_t shift = 0;        // physical bit = logical bit + shift
+  uint32_t phys_first = 0;  // physical bytes touched
+  uint32_t phys_len = 0;
+};
+
+// Intersects an FMMU with the datagram's logical bit range; false when they do not meet or
+// the physical side would run past the 64 KiB address space.
+bool intersect(uint32_t logical_start, uint16_t length, uint8_t start_bit, uint8_t stop_bit,
+               uint16_t physical_start, uint8_t physical_bit, uint64_t dg_lo, uint64_t dg_hi,
+               Span& out) {
+  if (length == 0) return false;
+  const uint64_t f_lo = static_cast<uint64_t>(logical_start) * 8 + start_bit;
+  const uint64_t f_hi = (static_cast<uint64_t>(logical_start) + length - 1) * 8 + stop_bit;
+  if (f_hi < f_lo) return false;
+  out.lo = std::max(f_lo, dg_lo);
+  out.hi = std::min(f_hi, dg_hi);
+  if (out.lo > out.hi) return false;
+  out.shift = static_cast<int64_t>(static_cast<uint64_t>(physical_start) * 8 + physical_bit) -
+              static_cast<int64_t>(f_lo);
+  const uint64_t p_lo = static_cast<uint64_t>(static_cast<int64_t>(out.lo) + out.shift);
+  const uint64_t p_hi = static_cast<uint64_t>(static_cast<int64_t>(out.hi) + out.shift);
+  if (p_hi / 8 >= reg::kAddressSpace) return false;
+  out.phys_first = static_cast<uint32_t>(p_lo / 8);
+  out.phys_len = static_cast<uint32_t>(p_hi / 8 - p_lo / 8 + 1);
+  return true;
+}
+
+}  // namespace
+
+void Esc::reload_fmmu(int index) {
+  const uint8_t* p = &mem_[reg::kFmmu + reg::kFmmuSize * index];
+  FmmuState& f = fmmu_[index];
+  f.logical_start = le::get32(p);
+  f.length = le::get16(p + 4);
+  f.logical_start_bit = p[6] & 0x07;
+  f.logical_stop_bit = p[7] & 0x07;
+  f.physical_start = le::get16(p + 8);
+  f.physical_start_bit = p[10] & 0x07;
+  f.type = p[11] & 0x03;
+  fmmu_active_count_ = 0;
+  for (int n = 0; n < kFmmus; ++n) {
+    const uint8_t* q = &mem_[reg::kFmmu + reg::kFmmuSize * n];
+    if ((q[12] & 0x01) && (q[11] & 0x03))
+      fmmu_active_[fmmu_active_count_++] = static_cast<uint8_t>(n);
+  }
+}
+
+uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len) {
+  if (fmmu_active_count_ == 0 || len == 0) return 0;
+  const auto cmd = static_cast<Command>(command);
+  const bool may_read = cmd == Command::Lrd || cmd == Command::Lrw;
+  const bool may_write = cmd == Command::Lwr || cmd == Command::Lrw;
+  const uint64_t dg_lo = static_cast<uint64_t>(address) * 8;
+  const uint64_t dg_hi = (static_cast<uint64_t>(address) + len) * 8 - 1;
+
+  // LRW reads the old memory into the datagram while writing the incoming data: keep the
+  // incoming bytes when this ESC both reads and writes inside the datagram.
+  bool any_read = false;
+  bool any_write = false;
+  for (uint8_t k = 0; k < fmmu_active_count_; ++k) {
+    const FmmuState& f = fmmu_[fmmu_active_[k]];
+    Span s;
+    if (!intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit,
+                   f.physical_start, f.physical_start_bit, dg_lo, dg_hi, s)) {
+      continue;
+    }
+    any_read |= may_read && (f.type & 0x01);
+    any_write |= may_write && (f.type & 0x02);
+  }
+  if (!any_read && !any_write) return 0;
+  const uint8_t* incoming = data;
+  if (any_read && any_write) {
+    std::memcpy(scratch_.data(), data, len);
+    incoming = scratch_.data();
+  }
+
+  bool read_done = false;
+  bool write_done = false;
+  if (any_read) {
+    for (uint8_t k = 0; k < fmmu_active_count_; ++k) {
+      const FmmuState& f = fmmu_[fmmu_active_[k]];
+      if ((f.type & 0x01) == 0) continue;
+      Span s;
+      if (!intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit,
+                     f.physical_start, f.physical_start_bit, dg_lo, dg_hi, s)) {
+        continue;
+      }
+      read_done |= fmmu_read(f, s.lo, s.hi, dg_lo, data);
+    }
+  }
+  if (any_write) {
+    for (uint8_t k = 0; k < fmmu_active_count_; ++k) {
+      const FmmuState& f = fmmu_[fmmu_active_[k]];
+      if ((f.type & 0x02) == 0) continue;
+      Span s;
+      if (!intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit,
+                     f.physical_start, f.physical_start_bit, dg_lo, dg_hi, s)) {
+        continue;
+      }
+      write_done |= fmmu_write(f, s.lo, s.hi, dg_lo, incoming);
+    }
+  }
+  // ETG.1000.4 §5.4.4: LRD and LWR count 1 per slave; LRW counts 1 for a read, 2 for a write.
+  if (cmd == Command::Lrw) return static_cast<uint8_t>((read_done ? 1 : 0) + (write_done ? 2 : 0));
+  return (read_done || write_done) ? 1 : 0;
+}
+
+bool Esc::fmmu_read(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_lo, uint8_t* data) {
+  Span s;
+  intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit, f.physical_start,
+            f.physical_start_bit, lo, hi, s);
+  const auto first = static_cast<uint16_t>(s.phys_first);
+  const auto plen = static_cast<uint16_t>(s.phys_len);
+  if (!sm_allows_read(first, plen)) return false;
+  const bool registers = first < reg::kProcessRam;
+  const uint16_t reg_len =
+      registers ? static_cast<uint16_t>(
+                      std::min<uint32_t>(s.phys_first + s.phys_len, reg::kProcessRam) - first)
+                : 0;
+  if (registers) before_register_read(first, reg_len);
+  if (s.shift % 8 == 0) {
+    // Physical and logical bit positions agree: copy whole bytes, masking the edges.
+    const int64_t byte_shift = s.shift / 8;
+    for (uint64_t b = lo / 8; b <= hi / 8; ++b) {
+      const uint8_t mask = byte_mask(b, lo, hi);
+      uint8_t& d = data[b - dg_lo / 8];
+      const uint8_t m = mem_[static_cast<uint64_t>(static_cast<int64_t>(b) + byte_shift)];
+      d = static_cast<uint8_t>((d & ~mask) | (m & mask));
+    }
+  } else {
+    for (uint64_t bit = lo; bit <= hi; ++bit) {
+      const uint64_t pb = static_cast<uint64_t>(static_cast<int64_t>(bit) + s.shift);
+      const uint64_t db = bit - dg_lo;
+      const uint8_t v = (mem_[pb / 8] >> (pb % 8)) & 1;
+      data[db / 8] = static_cast<uint8_t>((data[db / 8] & ~(1u << (db % 8))) | (v << (db % 8)));
+    }
+  }
+  sm_after_read(first, plen);
+  if (registers) after_register_read(first, reg_len);
+  return true;
+}
+
+bool Esc::fmmu_write(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_lo,
+                     const uint8_t* data) {
+  Span s;
+  intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit, f.physical_start,
+            f.physical_start_bit, lo, hi, s);
+  const auto first = static_cast<uint16_t>(s.phys_first);
+  const auto plen = static_cast<uint16_t>(s.phys_len);
+  if (!sm_allows_write(first, plen)) return false;
+  // Registers keep their write masks and side effects: merge into a copy of the current
+  // bytes, then write that copy through the register path in chunks.
+  std::array<uint8_t, 256> chunk{};
+  uint32_t p = s.phys_first;
+  const uint32_t p_end = s.phys_first + s.phys_len;
+  while (p < p_end) {
+    const bool registers = p < reg::kProcessRam;
+    const uint32_t n =
+        registers ? std::min<uint32_t>({p_end, reg::kProcessRam, p + 256}) - p : p_end - p;
+    uint8_t* target = registers ? chunk.data() : &mem_[p];
+    if (registers) std::memcpy(chunk.data(), &mem_[p], n);
+    if (s.shift % 8 == 0) {
+      for (uint32_t i = 0; i < n; ++i) {
+        const int64_t lb = static_cast<int64_t>(p + i) - s.shift / 8;  // logical byte
+        const uint8_t mask = byte_mask(static_cast<uint64_t>(lb), lo, hi);
+        const uint8_t d = data[static_cast<uint64_t>(lb) - dg_lo / 8];
+        target[i] = static_cast<uint8_t>((target[i] & ~mask) | (d & mask));
+      }
+    } else {
+      for (uint64_t bit = lo; bit <= hi; ++bit) {
+        const uint64_t pb = static_cast<uint64_t>(static_cast<int64_t>(bit) + s.shift);
+        if (pb / 8 < p || pb / 8 >= p + n) continue;
+        const uint64_t db = bit - dg_lo;
+        const uint8_t v = (data[db / 8] >> (db % 8)) & 1;
+        uint8_t& t = target[pb / 8 - p];
+        t = static_cast<uint8_t>((t & ~(1u << (pb % 8))) | (v << (pb % 8)));
+      }
+    }
+    if (registers) {
+      write_registers(static_cast<uint16_t>(p), chunk.data(), static_cast<uint16_t>(n));
+      after_register_write(static_cast<uint16_t>(p), chunk.data(), static_cast<uint16_t>(n));
+    }
+    p += n;
+  }
+  sm_after_write(first, plen);
+  return true;
+}
+
+}  // namespace rackcat::ecat

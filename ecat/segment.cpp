@@ -1,0 +1,79 @@
+#include "ecat/segment.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+
+namespace rackcat::ecat {
+
+Segment::Segment(std::vector<Application*> applications, const Clock& clock, SegmentOptions options)
+    : clock_(clock), options_(options) {
+  if (applications.empty()) throw std::invalid_argument("a segment needs at least one slave");
+  const size_t n = applications.size();
+  slaves_.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    if (applications[k] == nullptr) throw std::invalid_argument("null application in segment");
+    EscOptions esc = options_.esc;
+    esc.power_on_local_time_ns = esc.power_on_local_time_ns + k * options_.power_on_spacing_ns;
+    slaves_[k].esc_ = std::make_unique<Esc>(*applications[k], clock_, esc);
+    slaves_[k].esc_->set_port1_link(k + 1 < n);
+  }
+  // Arrival at port 0 of slave k, and the time the frame takes from entering slave k at port 0
+  // to leaving it at port 0 again (through everything behind it).
+  offsets_.resize(n);
+  const uint64_t hop = options_.forward_delay_ns + options_.cable_delay_ns;
+  std::vector<uint64_t> loop(n);
+  loop[n - 1] = options_.forward_delay_ns;  // last slave: processing unit, then port 0 out
+  for (size_t k = n - 1; k-- > 0;) {
+    loop[k] = options_.forward_delay_ns + 2ull * options_.cable_delay_ns + loop[k + 1] +
+              options_.return_delay_ns;
+  }
+  for (size_t k = 0; k < n; ++k) {
+    offsets_[k].port0_ns = k * hop;
+    offsets_[k].port1_ns = k + 1 < n
+                               ? offsets_[k].port0_ns + hop + loop[k + 1] + options_.cable_delay_ns
+                               : offsets_[k].port0_ns;
+  }
+}
+
+size_t Segment::process(std::span<uint8_t> frame) {
+  parse_frame(frame, layout_);
+  if (layout_.kind == FrameLayout::Kind::NotEtherCat) return 0;
+  // The ESC marks frames it has processed: bit 1 of the first source-MAC byte (locally
+  // administered), so a master can tell its own frame from the one the line returns.
+  frame[6] |= 0x02;
+  if (layout_.kind == FrameLayout::Kind::OtherType) return frame.size();
+  const uint64_t t0 = clock_.now_ns();
+  for (Slave& s : slaves_) s.esc_->service(t0);
+  uint8_t* base = frame.data();
+  for (size_t k = 0; k < slaves_.size(); ++k) {
+    Esc& esc = *slaves_[k].esc_;
+    esc.begin_frame({t0 + offsets_[k].port0_ns, t0 + offsets_[k].port1_ns});
+    for (size_t d = 0; d < layout_.count; ++d) {
+      esc.process_datagram(base + layout_.offset[d], layout_.length[d]);
+    }
+    if (layout_.malformed) esc.count_frame_error();
+    esc.end_frame();
+    if (!esc.forwards_to_port1()) break;  // last slave, or loop closed by DL control
+  }
+  return frame.size();
+}
+
+void Segment::service() {
+  const uint64_t now = clock_.now_ns();
+  for (Slave& s : slaves_) s.esc_->service(now);
+}
+
+uint64_t Segment::next_event_ns() const {
+  uint64_t next = std::numeric_limits<uint64_t>::max();
+  for (const Slave& s : slaves_) next = std::min(next, s.esc_->next_event_ns());
+  return next;
+}
+
+uint64_t Segment::next_sync_event_ns() const {
+  uint64_t next = std::numeric_limits<uint64_t>::max();
+  for (const Slave& s : slaves_) next = std::min(next, s.esc_->next_sync_event_ns());
+  return next;
+}
+
+}  // namespace rackcat::ecat

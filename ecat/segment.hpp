@@ -1,0 +1,84 @@
+// A line of emulated slaves in one process: the frame enters slave 0 at port 0, passes every
+// slave's processing unit in order, and comes back out of slave 0 (ETG.1000.4 §5.1). Each
+// slave has its own ESC and Application.
+//
+// Typical use by a link:
+//   rackcat::ecat::Segment segment({&device_a, &device_b});
+//   size_t n = segment.process(frame);            // in place; send frame[0..n) back, 0 = drop
+//   timer at segment.next_event_ns(): segment.service();
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "ecat/application.hpp"
+#include "ecat/clock.hpp"
+#include "ecat/esc.hpp"
+#include "ecat/frame.hpp"
+
+namespace rackcat::ecat {
+
+struct SegmentOptions {
+  // Modelled propagation (ns), used for the DC receive-time latches: through a slave from
+  // port 0 via the processing unit to port 1, back from port 1 to port 0, and per cable.
+  uint32_t forward_delay_ns = 320;
+  uint32_t return_delay_ns = 280;
+  uint32_t cable_delay_ns = 10;
+  // Slave k's local clock reads k x this at construction (slaves power up at different times).
+  uint64_t power_on_spacing_ns = 1'234'567;
+  EscOptions esc;  // identification and SII options of every slave
+};
+
+class Segment {
+ public:
+  // One slave of the line: its ESC and the device behind it.
+  class Slave {
+   public:
+    Esc& esc() { return *esc_; }
+    const Esc& esc() const { return *esc_; }
+    Application& application() const { return esc_->application(); }
+
+   private:
+    friend class Segment;
+    std::unique_ptr<Esc> esc_;
+  };
+
+  // `applications` in line order (position 0 is next to the master); they and `clock` must
+  // outlive the segment. At least one slave.
+  explicit Segment(std::vector<Application*> applications,
+                   const Clock& clock = SteadyClock::instance(), SegmentOptions options = {});
+
+  // Processes one Ethernet frame in place, as the line would, and returns the length of the
+  // frame that comes back to the master: frame.size() for EtherCAT frames (full length, bit
+  // 0x02 of the first source-MAC byte set), 0 for frames the ESCs do not answer (other
+  // EtherTypes, runts). Malformed EtherCAT frames never crash: complete datagrams before the
+  // defect are processed, the rest passes unchanged and every slave counts a frame error.
+  // Allocates nothing. Fires due SYNC events and watchdogs first (see service()).
+  size_t process(std::span<uint8_t> frame);
+
+  // Fires the SYNC events and watchdog expiries due now (clock time). Call at
+  // next_event_ns(); process() calls it too.
+  void service();
+  // Clock time of the earliest pending SYNC event or watchdog deadline of any slave;
+  // UINT64_MAX when none.
+  uint64_t next_event_ns() const;
+  // Clock time of the earliest pending SYNC0/SYNC1 event of any slave; UINT64_MAX when none.
+  uint64_t next_sync_event_ns() const;
+
+  size_t size() const { return slaves_.size(); }
+  Slave& slave(size_t position) { return slaves_.at(position); }
+  const Slave& slave(size_t position) const { return slaves_.at(position); }
+  const Clock& clock() const { return clock_; }
+
+ private:
+  const Clock& clock_;
+  SegmentOptions options_;
+  std::vector<Slave> slaves_;
+  std::vector<PassTimes> offsets_;  // per slave, relative to the frame's arrival at slave 0
+  FrameLayout layout_;
+};
+
+}  // namespace rackcat::ecat

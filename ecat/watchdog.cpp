@@ -1,0 +1,39 @@
+// Process-data watchdog (ETG.1000.4 §6.5.3, ESC datasheet 0x0400-0x0443): retriggered by every
+// completed write of a SyncManager with watchdog trigger enabled (SM2 in practice); on expiry
+// the status bit drops, the counter counts and an OP slave falls to SAFEOP with AL status
+// 0x001B after putting its outputs in the safe state.
+#include "ecat/esc.hpp"
+#include "ecat/le.hpp"
+#include "ecat/registers.hpp"
+
+namespace rackcat::ecat {
+
+uint64_t Esc::watchdog_period_ns() const {
+  // One watchdog tick is (divider + 2) x 40 ns (25 MHz); the reset values give 100 µs x 1000.
+  const uint64_t tick = (static_cast<uint64_t>(le::get16(&mem_[reg::kWatchdogDivider])) + 2) * 40;
+  return tick * le::get16(&mem_[reg::kWatchdogTimeProcessData]);
+}
+
+void Esc::watchdog_trigger(uint64_t now_ns) {
+  const uint64_t period = watchdog_period_ns();
+  mem_[reg::kWatchdogStatusProcessData] |= 0x01;
+  if (period == 0) {  // time 0 disables the watchdog
+    watchdog_armed_ = false;
+    return;
+  }
+  watchdog_armed_ = true;
+  watchdog_deadline_ = now_ns + period;
+}
+
+void Esc::watchdog_expired() {
+  watchdog_armed_ = false;
+  mem_[reg::kWatchdogStatusProcessData] &= static_cast<uint8_t>(~0x01);
+  if (mem_[reg::kWatchdogCounterProcessData] != 0xFF) ++mem_[reg::kWatchdogCounterProcessData];
+  mem_[reg::kAlEventRequest] |= 0x40;
+  if (state_ == AlState::Op) {
+    app_.on_watchdog_expired();
+    esm_error(AlState::SafeOp, 0x001B);
+  }
+}
+
+}  // namespace rackcat::ecat

@@ -1,0 +1,62 @@
+// A small device for the ESC tests: a fixed SII image hand-built per ETG.2010 (identity,
+// mailbox SMs at 0x1000/0x1080, 4 output and 6 input bytes, strings, general, FMMU and SM
+// categories), a mailbox that echoes every request, and records of what the ESC called.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "ecat/application.hpp"
+
+namespace rackcat::ecat::test {
+
+inline constexpr uint32_t kVendorId = 0x00000ACE;
+inline constexpr uint32_t kProductCode = 0x00010001;
+inline constexpr uint32_t kRevision = 0x00000003;
+inline constexpr uint32_t kSerial = 0x12345678;
+inline constexpr uint16_t kMbxOutStart = 0x1000;  // SM0, master -> slave
+inline constexpr uint16_t kMbxInStart = 0x1080;   // SM1, slave -> master
+inline constexpr uint16_t kMbxSize = 128;
+inline constexpr uint16_t kOutputsStart = 0x1100;  // SM2
+inline constexpr uint16_t kInputsStart = 0x1180;   // SM3
+inline constexpr uint16_t kOutputBytes = 4;
+inline constexpr uint16_t kInputBytes = 6;
+
+// The SII image: words 0-0x3F header, categories from word 0x40.
+std::vector<uint8_t> make_test_sii();
+
+class TestApplication : public Application {
+ public:
+  TestApplication();
+
+  std::span<const uint8_t> eeprom() const override { return sii; }
+  void on_eeprom_write(uint16_t word_address, std::span<const uint8_t> data) override;
+  uint16_t on_state_request(AlState from, AlState to) override;
+  void on_state_changed(AlState from, AlState to) override;
+  ProcessDataSizes process_data_sizes() const override { return sizes; }
+  size_t on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) override;
+  size_t poll_mailbox(std::span<uint8_t> reply) override;
+  void update_inputs(std::span<uint8_t> inputs) override;
+  void on_outputs(std::span<const uint8_t> outputs) override;
+  void on_sync(int which, uint64_t system_time_ns) override;
+  void on_watchdog_expired() override { ++watchdog_expiries; }
+
+  std::vector<uint8_t> sii;
+  ProcessDataSizes sizes{kOutputBytes, kInputBytes};
+  uint16_t veto_code = 0;           // returned by on_state_request when non-zero
+  AlState veto_to = AlState::Init;  // ... for requests to this state
+  std::vector<uint8_t> inputs_value = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66};
+  std::vector<uint8_t> last_outputs;
+  int outputs_count = 0;
+  int inputs_count = 0;
+  int mailbox_requests = 0;
+  std::vector<uint8_t> last_request;
+  std::vector<uint8_t> pending_emergency;  // sent by poll_mailbox once
+  std::vector<std::pair<AlState, AlState>> transitions;
+  std::vector<std::pair<int, uint64_t>> syncs;
+  int watchdog_expiries = 0;
+  std::vector<std::pair<uint16_t, uint16_t>> eeprom_writes;  // word address, value
+};
+
+}  // namespace rackcat::ecat::test
