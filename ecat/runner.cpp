@@ -1,0 +1,70 @@
+#include "ecat/runner.hpp"
+
+namespace rackcat::ecat {
+namespace {
+
+// The segment's deadlines (SYNC pulses, watchdogs) as the loop's timer source. Both use
+// CLOCK_MONOTONIC nanoseconds.
+class SegmentTimers final : public TimerSource {
+ public:
+  explicit SegmentTimers(Segment& segment) : segment_(segment) {}
+  uint64_t next_deadline_ns() const override { return segment_.next_event_ns(); }
+  void on_time(uint64_t) override { segment_.service(); }
+
+ private:
+  Segment& segment_;
+};
+
+}  // namespace
+
+Runner::Runner(RunnerOptions options) : options_(std::move(options)) {}
+
+Runner::~Runner() = default;
+
+int Runner::open(const char* program, FILE* err) {
+  EventLoop::block_stop_signals();
+  try {
+    link_ = std::make_unique<RawSocketLink>(options_.interface_name);
+  } catch (const LinkError& e) {
+    std::fprintf(err, "%s: %s\n", program, e.what());
+    return e.kind() == LinkErrorKind::System ? kExitFailure : kExitUsage;
+  }
+  if (!options_.pcap_path.empty()) {
+    try {
+      pcap_ = std::make_unique<PcapWriter>(options_.pcap_path);
+    } catch (const std::exception& e) {
+      std::fprintf(err, "%s: %s\n", program, e.what());
+      return kExitUsage;
+    }
+  }
+  if (options_.drop_privileges) {
+    try {
+      privileges_ = drop_privileges({.user = options_.user, .use_sudo_user = true});
+    } catch (const PrivilegeError& e) {
+      std::fprintf(err, "%s: %s\n", program, e.what());
+      return kExitUsage;
+    }
+  }
+  try {
+    loop_ = std::make_unique<EventLoop>(
+        *link_,
+        EventLoop::Options{.wait = options_.wait, .pcap = pcap_.get(), .stop_on_signals = true});
+  } catch (const std::exception& e) {
+    std::fprintf(err, "%s: %s\n", program, e.what());
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+int Runner::run(Segment& segment) {
+  if (!loop_) return kExitFailure;
+  SegmentTimers timers(segment);
+  loop_->set_frame_handler([&segment](std::span<uint8_t> frame) { return segment.process(frame); });
+  loop_->set_timer_source(&timers);
+  const int rc = loop_->run();
+  loop_->set_timer_source(nullptr);
+  if (pcap_) pcap_->flush();
+  return rc;
+}
+
+}  // namespace rackcat::ecat

@@ -1,0 +1,60 @@
+// The wire test slave's device: 4 output bytes (RxPDO 0x1600) copied to 4 input bytes
+// (TxPDO 0x1A00), so a master sees its outputs come back one cycle later. No mailbox
+// protocol. Counts SYNC0 pulses and watchdog expiries for the test's final report.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <vector>
+
+#include "ecat/application.hpp"
+#include "tests/ecat_wire_slave/test_sii_image.hpp"
+
+namespace rackcat::tests {
+
+class LoopbackApplication final : public ecat::Application {
+ public:
+  explicit LoopbackApplication(const TestSiiIdentity& identity) : sii_(build_test_sii(identity)) {}
+
+  std::span<const uint8_t> eeprom() const override { return sii_; }
+  uint16_t on_state_request(ecat::AlState, ecat::AlState) override { return 0; }
+  void on_state_changed(ecat::AlState, ecat::AlState to) override { state_ = to; }
+  ecat::ProcessDataSizes process_data_sizes() const override {
+    return {kTestProcessDataBytes, kTestProcessDataBytes};
+  }
+  size_t on_mailbox(std::span<const uint8_t>, std::span<uint8_t>) override { return 0; }
+
+  void update_inputs(std::span<uint8_t> inputs) override {
+    const size_t n = std::min(inputs.size(), last_outputs_.size());
+    std::copy_n(last_outputs_.begin(), n, inputs.begin());
+  }
+  void on_outputs(std::span<const uint8_t> outputs) override {
+    const size_t n = std::min(outputs.size(), last_outputs_.size());
+    std::copy_n(outputs.begin(), n, last_outputs_.begin());
+    ++outputs_received_;
+  }
+  void on_sync(int which, uint64_t) override {
+    if (which == 0) ++sync0_events_;
+  }
+  void on_watchdog_expired() override {
+    last_outputs_.fill(0);  // safe state
+    ++watchdog_expiries_;
+  }
+
+  uint64_t sync0_events() const { return sync0_events_; }
+  uint64_t outputs_received() const { return outputs_received_; }
+  uint64_t watchdog_expiries() const { return watchdog_expiries_; }
+  ecat::AlState state() const { return state_; }
+
+ private:
+  std::vector<uint8_t> sii_;
+  std::array<uint8_t, kTestProcessDataBytes> last_outputs_{};
+  uint64_t sync0_events_ = 0;
+  uint64_t outputs_received_ = 0;
+  uint64_t watchdog_expiries_ = 0;
+  ecat::AlState state_ = ecat::AlState::Init;
+};
+
+}  // namespace rackcat::tests

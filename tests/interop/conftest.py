@@ -1,0 +1,223 @@
+"""Fixtures for driving an emulated EtherCAT segment with a real master over a veth pair.
+
+Each test gets a private network namespace holding one end of a veth pair; the slave process
+runs inside the namespace on that end, and the master (pysoem, in the pytest process) uses the
+other end, which stays in the host namespace under a unique name. Namespaces, interfaces and
+processes are removed after every test, whatever happens.
+
+The command that starts the slave is a template, so the same tests drive any slave program:
+
+    pytest tests/interop                                   # build/ecat_wire_slave (default)
+    pytest tests/interop --slave-cmd "build/rackcat run --iface {iface} --slaves {slaves}"
+
+Placeholders: {iface} (slave end), {slaves} (segment size), {pcap} (capture file). Extra
+arguments a test needs (--busy-poll, --pcap ...) are appended. RACKCAT_BUILD_DIR selects the
+build directory (default: build).
+
+Everything here needs root (netns, veth, raw sockets); the tests skip with a message otherwise.
+"""
+import itertools
+import os
+import re
+import select
+import shlex
+import shutil
+import signal
+import socket
+import struct
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+BUILD = Path(os.environ.get("RACKCAT_BUILD_DIR", REPO / "build"))
+if not BUILD.is_absolute():
+    BUILD = REPO / BUILD
+DEFAULT_SLAVE_CMD = f"{BUILD}/ecat_wire_slave --iface {{iface}} --slaves {{slaves}}"
+ETHERTYPE_ECAT = 0x88A4
+_counter = itertools.count()
+
+
+def pytest_addoption(parser):
+    parser.addoption(
+        "--slave-cmd",
+        default=os.environ.get("RACKCAT_SLAVE_CMD", DEFAULT_SLAVE_CMD),
+        help="command template that starts the slave: {iface} {slaves} placeholders",
+    )
+
+
+def _run(*cmd, check=True):
+    return subprocess.run(cmd, check=check, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          text=True)
+
+
+def require_root():
+    if os.geteuid() != 0:
+        pytest.skip("wire interop tests need root: they create a network namespace and a veth "
+                    "pair and open raw sockets (run pytest as root, e.g. with sudo)")
+    if shutil.which("ip") is None:
+        pytest.skip("wire interop tests need iproute2 ('ip'); run scripts/setup.sh")
+
+
+class VethNamespace:
+    """A private namespace with the slave end of a veth pair; the master end stays here."""
+
+    def __init__(self):
+        n = next(_counter)
+        tag = f"{os.getpid() % 100000}x{n}"
+        self.name = f"rackcat-it-{tag}"
+        self.slave_iface = "ecat-slave"
+        self.master_iface = f"rcm{tag}"[:15]
+        self._created = False
+
+    def __enter__(self):
+        peer = f"rcs{self.master_iface[3:]}"[:15]
+        _run("ip", "netns", "add", self.name)
+        self._created = True
+        _run("ip", "link", "add", self.master_iface, "type", "veth", "peer", "name", peer)
+        _run("ip", "link", "set", peer, "netns", self.name)
+        _run("ip", "-n", self.name, "link", "set", peer, "name", self.slave_iface)
+        # No IPv6 chatter (router solicitations) on the wire: the captures stay EtherCAT.
+        _run("sysctl", "-qw", f"net.ipv6.conf.{self.master_iface}.disable_ipv6=1", check=False)
+        _run(*self.exec_prefix(), "sysctl", "-qw",
+             f"net.ipv6.conf.{self.slave_iface}.disable_ipv6=1", check=False)
+        _run("ip", "link", "set", self.master_iface, "up")
+        _run("ip", "-n", self.name, "link", "set", self.slave_iface, "up")
+        _run("ip", "-n", self.name, "link", "set", "lo", "up")
+        return self
+
+    def exec_prefix(self):
+        return ["ip", "netns", "exec", self.name]
+
+    def __exit__(self, *exc):
+        if not self._created:
+            return
+        pids = _run("ip", "netns", "pids", self.name, check=False).stdout.split()
+        for pid in pids:
+            try:
+                os.kill(int(pid), signal.SIGKILL)
+            except (ProcessLookupError, ValueError):
+                pass
+        _run("ip", "link", "del", self.master_iface, check=False)
+        _run("ip", "netns", "del", self.name, check=False)
+
+
+def probe_brd(iface, timeout_s=10.0):
+    """Sends BRD 0x0000 frames until a slave answers; returns the working counter."""
+    s = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETHERTYPE_ECAT))
+    try:
+        s.bind((iface, ETHERTYPE_ECAT))
+        mac = s.getsockname()[4]
+        # Ethernet, EtherCAT header (length 12, type 1), BRD idx 0x5A ADP 0 ADO 0 len 2.
+        dgram = struct.pack("<BBHHHH", 0x07, 0x5A, 0, 0, 2, 0) + b"\0\0" + b"\0\0"
+        frame = b"\xff" * 6 + mac + struct.pack(">H", ETHERTYPE_ECAT) + \
+            struct.pack("<H", len(dgram) | 0x1000) + dgram
+        frame = frame.ljust(60, b"\0")
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            s.send(frame)
+            end = time.monotonic() + 0.1
+            while time.monotonic() < end:
+                r, _, _ = select.select([s], [], [], max(0.0, end - time.monotonic()))
+                if not r:
+                    break
+                reply = s.recv(2048)
+                if len(reply) >= 30 and reply[6] & 0x02 and reply[17] == 0x5A:
+                    return struct.unpack_from("<H", reply, 28)[0]
+        return None
+    finally:
+        s.close()
+
+
+class SlaveProcess:
+    """The slave program running in the namespace, with its log and optional capture."""
+
+    def __init__(self, ns, cmd_template, slaves, extra_args, pcap, log_path):
+        self.ns = ns
+        self.pcap = pcap
+        self.log_path = log_path
+        fields = {"iface": ns.slave_iface, "slaves": slaves, "pcap": pcap or ""}
+        cmd = [part.format(**fields) for part in shlex.split(cmd_template)]
+        cmd += list(extra_args)
+        if pcap and "{pcap}" not in cmd_template:
+            cmd += ["--pcap", str(pcap)]
+        self.cmd = cmd
+        self._log = open(log_path, "w")
+        self.proc = subprocess.Popen(ns.exec_prefix() + cmd, stdout=self._log,
+                                     stderr=subprocess.STDOUT)
+        self.returncode = None
+
+    def log(self):
+        if not self._log.closed:
+            self._log.flush()
+        return Path(self.log_path).read_text(errors="replace")
+
+    def wait_ready(self, expected_slaves):
+        wkc = probe_brd(self.ns.master_iface)
+        if wkc is None:
+            self.stop()
+            pytest.fail(f"slave did not answer a BRD within 10 s: {self.cmd}\n{self.log()}")
+        assert wkc == expected_slaves, f"BRD working counter {wkc}, expected {expected_slaves}"
+
+    def stop(self, sig=signal.SIGTERM, timeout=10):
+        if self.returncode is None:
+            if self.proc.poll() is None:
+                self.proc.send_signal(sig)
+                try:
+                    self.proc.wait(timeout)
+                except subprocess.TimeoutExpired:
+                    self.proc.kill()
+                    self.proc.wait()
+            self.returncode = self.proc.returncode
+            self._log.close()
+        return self.returncode
+
+
+@pytest.fixture
+def slave_cmd(request):
+    return request.config.getoption("--slave-cmd")
+
+
+@pytest.fixture
+def ecat_segment(slave_cmd, tmp_path):
+    """Factory: ecat_segment(slaves=1, extra_args=(), pcap=True) -> (master_iface, slave).
+
+    Starts the slave in a fresh namespace and waits until it answers on the wire. Everything
+    is torn down after the test.
+    """
+    require_root()
+    started = []
+
+    def start(slaves=1, extra_args=(), pcap=True):
+        ns = VethNamespace().__enter__()
+        started.append(ns)
+        n = len(started)
+        cap = tmp_path / f"segment{n}.pcap" if pcap else None
+        slave = SlaveProcess(ns, slave_cmd, slaves, extra_args, cap, tmp_path / f"slave{n}.log")
+        started.append(slave)
+        slave.wait_ready(slaves)
+        return ns.master_iface, slave
+
+    yield start
+    for item in reversed(started):
+        if isinstance(item, SlaveProcess):
+            item.stop()
+        else:
+            item.__exit__(None, None, None)
+
+
+def tshark_problems(pcap):
+    """(total frames, frames dissected as EtherCAT, lines of malformed/error output)."""
+    if shutil.which("tshark") is None:
+        pytest.skip("tshark not installed (scripts/setup.sh installs it)")
+
+    def lines(*args):
+        out = _run("tshark", "-n", "-r", str(pcap), *args).stdout
+        return [line for line in out.splitlines() if line.strip()]
+
+    total = len(lines("-T", "fields", "-e", "frame.number"))
+    ecat = len(lines("-Y", "ecat", "-T", "fields", "-e", "frame.number"))
+    bad = lines("-Y", "_ws.malformed || _ws.expert.severity >= error")
+    return total, ecat, bad
