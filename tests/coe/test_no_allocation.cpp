@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <new>
 
+#include "coe/process_image.hpp"
 #include "tests/coe/sdo_fixture.hpp"
 
 namespace {
@@ -89,6 +90,19 @@ TEST_F(SdoTest, RequestPathMakesNoHeapAllocation) {
   EXPECT_EQ(after - before, 0);
   EXPECT_EQ(hooked, 1);
   for (size_t n : lengths) EXPECT_GT(n, 0u);
+}
+
+TEST_F(SdoTest, CyclicPathMakesNoHeapAllocation) {
+  ProcessImage image(od);
+  ASSERT_EQ(image.compile(), AbortCode::None);
+  Bytes sm2(image.output_bytes(), 0x5A), sm3(image.input_bytes());
+  const long before = g_allocations.load();
+  for (int i = 0; i < 1000; ++i) {
+    image.write_outputs(sm2);
+    image.read_inputs(sm3);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(od.find(0x7000)->get_u(2), 0x5Au);
 }
 
 }  // namespace
