@@ -227,4 +227,56 @@ void TestMaster::config_map() {
   }
 }
 
+std::vector<uint8_t> hex(std::string_view text, size_t pad_to) {
+  std::vector<uint8_t> out;
+  int nibbles = 0;
+  uint8_t value = 0;
+  for (char c : text) {
+    int v = -1;
+    if (c >= '0' && c <= '9') v = c - '0';
+    if (c >= 'a' && c <= 'f') v = c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') v = c - 'A' + 10;
+    if (v < 0) continue;
+    value = static_cast<uint8_t>(value << 4 | v);
+    if (++nibbles == 2) {
+      out.push_back(value);
+      nibbles = 0;
+      value = 0;
+    }
+  }
+  if (out.size() < pad_to) out.resize(pad_to, 0);
+  return out;
+}
+
+Line::Line(size_t n, SegmentOptions options) {
+  std::vector<Application*> ptrs;
+  for (size_t i = 0; i < n; ++i) {
+    apps.push_back(std::make_unique<TestApplication>());
+    ptrs.push_back(apps.back().get());
+  }
+  segment = std::make_unique<Segment>(ptrs, clock, options);
+  master = std::make_unique<TestMaster>(*segment);
+}
+
+void Line::to_safeop() {
+  to_preop();
+  master->config_map();
+  for (size_t i = 0; i < apps.size(); ++i) master->request_state(station(i), 0x04);
+}
+
+void Line::to_op() {
+  to_safeop();
+  cycle(std::vector<uint8_t>(apps.size() * kOutputBytes, 0));
+  for (size_t i = 0; i < apps.size(); ++i) master->request_state(station(i), 0x08);
+}
+
+std::vector<Reply> Line::cycle(const std::vector<uint8_t>& outputs) {
+  std::vector<uint8_t> image = outputs;
+  image.resize(apps.size() * (kOutputBytes + kInputBytes), 0);
+  FrameBuilder b;
+  b.add_logical(Command::Lrw, master->logical_outputs_base, image);
+  b.add(Command::Frmw, station(0), 0x0910, std::vector<uint8_t>(8, 0));
+  return master->send_frame(b);
+}
+
 }  // namespace rackcat::ecat::test

@@ -3,10 +3,13 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <string_view>
 #include <vector>
 
 #include "ecat/frame.hpp"
 #include "ecat/segment.hpp"
+#include "tests/ecat/test_application.hpp"
 
 namespace rackcat::ecat::test {
 
@@ -89,5 +92,27 @@ uint64_t get64(const std::vector<uint8_t>& v, size_t at);
 std::vector<uint8_t> bytes16(uint16_t v);
 std::vector<uint8_t> bytes32(uint32_t v);
 std::vector<uint8_t> bytes64(uint64_t v);
+
+// "ff ff 00 ..." -> bytes, padded with zeros to `pad_to` (the 60-byte Ethernet minimum).
+std::vector<uint8_t> hex(std::string_view text, size_t pad_to = 60);
+
+// A line of N test devices on a manual clock, with a master, and shortcuts to the states.
+struct Line {
+  explicit Line(size_t n, SegmentOptions options = {});
+  Esc& esc(size_t i) { return segment->slave(i).esc(); }
+  TestApplication& app(size_t i) { return *apps.at(i); }
+  static uint16_t station(size_t i) { return static_cast<uint16_t>(0x1001 + i); }
+  void to_preop() { master->config_init(); }
+  void to_safeop();
+  void to_op();
+  // One cyclic frame as SOEM sends it: LRW over all outputs and inputs, FRMW 0x0910 from
+  // the first slave. Returns the two replies.
+  std::vector<Reply> cycle(const std::vector<uint8_t>& outputs);
+
+  ManualClock clock;
+  std::vector<std::unique_ptr<TestApplication>> apps;
+  std::unique_ptr<Segment> segment;
+  std::unique_ptr<TestMaster> master;
+};
 
 }  // namespace rackcat::ecat::test
