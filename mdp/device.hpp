@@ -47,6 +47,10 @@ class CycleListener {
   virtual void on_detect_modules(Device&) {}
   // Parameters were (re)loaded: start-up, 0xFBF4 reload, 0xFBF0 reset.
   virtual void on_parameters_loaded(Device&) {}
+  // 0xFBF0 executed (from the SDO write, before its response): every object is back at its power-on
+  // value with the stored parameters applied (factory: stored parameters deleted first). A real
+  // device also resets its ESC; the application adapter does that here (ETG.5003.1).
+  virtual void on_device_reset(Device&, bool /*factory*/) {}
 };
 
 struct DeviceOptions {

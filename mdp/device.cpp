@@ -1,0 +1,478 @@
+// mdp::Device: the object dictionary of the rack behind the CoE SDO server, the process images of
+// the PDO assignment, the ESM hooks, and the command objects (ETG.5003.1 0xFBF0..0xFBF4, ETG.5001
+// 0xF002) with the stored parameters.
+#include "mdp/device.hpp"
+
+#include <openssl/evp.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+
+#include "coe/bits.hpp"
+#include "coe/sdo_server.hpp"
+#include "mdp/command_bytes.hpp"
+#include "mdp/object_dictionary_builder.hpp"
+#include "mdp/parameter_set.hpp"
+#include "mdp/parameter_store.hpp"
+#include "mdp/process_image.hpp"
+
+namespace rackcat::mdp {
+
+using coe::AbortCode;
+using coe::EsmState;
+using coe::Object;
+
+std::string default_state_dir() {
+  if (const char* xdg = std::getenv("XDG_STATE_HOME"); xdg && *xdg) {
+    return std::string(xdg) + "/rackcat";
+  }
+  if (const char* home = std::getenv("HOME"); home && *home) {
+    return std::string(home) + "/.local/state/rackcat";
+  }
+  return "rackcat-state";
+}
+
+namespace {
+
+// ETG.1000.6 / ETG.5001.1: AL status code "invalid configuration" family; 0x0070 = module ident
+// list mismatch (the configured 0xF030 differs from the detected 0xF050).
+constexpr uint16_t kAlModuleIdentMismatch = 0x0070;
+
+// Seconds of a "YYYY-MM-DD HH:MM:SS" text (UTC), already validated.
+int64_t parse_clock(std::string_view s) {
+  std::tm tm{};
+  std::sscanf(std::string(s).c_str(), "%d-%d-%d %d:%d:%d", &tm.tm_year, &tm.tm_mon, &tm.tm_mday,
+              &tm.tm_hour, &tm.tm_min, &tm.tm_sec);
+  tm.tm_year -= 1900;
+  tm.tm_mon -= 1;
+  return static_cast<int64_t>(timegm(&tm));
+}
+
+std::vector<uint8_t> digest(const EVP_MD* md, std::span<const uint8_t> data) {
+  unsigned char out[EVP_MAX_MD_SIZE];
+  unsigned int len = 0;
+  EVP_Digest(data.data(), data.size(), out, &len, md, nullptr);
+  return std::vector<uint8_t>(out, out + len);
+}
+
+}  // namespace
+
+struct Device::Impl {
+  Device* self = nullptr;
+  RackConfig config;
+  coe::ObjectDictionary od;
+  std::unique_ptr<coe::SdoServer> sdo;
+  std::unique_ptr<ProcessImage> outputs;
+  std::unique_ptr<ProcessImage> inputs;
+  std::unique_ptr<ParameterSet> params;
+  std::unique_ptr<ParameterStore> store;
+  std::vector<uint8_t> default_payload;  // the parameter set as shipped (factory defaults)
+  std::string state_dir;
+  std::string load_report;
+  EsmState state = EsmState::Init;
+  std::vector<CycleListener*> listeners;
+  SyncStatistics stats[2];
+  std::chrono::steady_clock::time_point power_on = std::chrono::steady_clock::now();
+  int64_t clock_offset_s = 0;  // clock written to 0x2000:08 minus the system clock
+  uint64_t last_sync_ns = 0;
+  // A command executed in validate_write, applied to its object in after_write.
+  struct PendingCommand {
+    uint8_t status = 0;
+    std::vector<uint8_t> response;
+    std::vector<uint8_t> payload;  // 0xFBF4: the parameters to apply
+    bool factory = false;          // 0xFBF0
+  } pending;
+
+  template <class F>
+  void notify(F&& f) {
+    for (CycleListener* l : listeners) f(*l);
+  }
+
+  uint32_t uptime_us() const {
+    return static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::microseconds>(
+                                     std::chrono::steady_clock::now() - power_on)
+                                     .count());
+  }
+
+  // --- stored parameters -------------------------------------------------------------------
+  // Applies the stored file if it is valid; reports what happened.
+  void load_stored() {
+    std::vector<uint8_t> payload;
+    const auto r = store->load(params->fingerprint(), payload, load_report);
+    if (r == ParameterStore::LoadResult::Loaded && !params->apply(payload)) {
+      load_report = "ignored parameter file " + store->path() + ": size does not match";
+    }
+  }
+
+  // The payload 0xFBF3 checksums: the file as stored now, or the shipped defaults without one.
+  std::vector<uint8_t> stored_payload() {
+    std::vector<uint8_t> payload;
+    std::string detail;
+    if (store->load(params->fingerprint(), payload, detail) == ParameterStore::LoadResult::Loaded)
+      return payload;
+    return default_payload;
+  }
+
+  void power_on_reset() {
+    od.for_each([](Object& o) { o.load_defaults(); });
+    clock_offset_s = 0;
+    load_stored();
+    outputs->compile();
+    inputs->compile();
+  }
+
+  void clear_latched() {
+    for (uint16_t index : {0xF390, 0xF391, 0xF392, 0xF393, 0xF394, 0xF396, 0xF398}) {
+      if (Object* o = od.find(index)) {
+        for (const auto& e : o->entries()) {
+          if (e.subindex > 0 || o->code() == coe::ObjectCode::Var) o->set_u(e.subindex, 0);
+        }
+      }
+    }
+    // 0x2rr1:08 bits 31..2 are latched, bits 1..0 the live RIM state (guide §3.3).
+    for (const auto& r : config.rims) {
+      if (Object* o = od.find(rim_info_index(r.number))) o->set_u(0x08, o->get_u(0x08) & 0x3);
+    }
+  }
+
+  void finish_command(Object& obj, std::span<const uint8_t> capabilities) {
+    obj.set_u(2, pending.status);
+    auto resp = obj.bytes(3);
+    std::fill(resp.begin(), resp.end(), 0);
+    if (!resp.empty()) resp[0] = pending.status;
+    for (size_t i = 0; i < pending.response.size() && i + 2 < resp.size(); ++i) {
+      resp[i + 2] = pending.response[i];
+    }
+    if (!capabilities.empty()) {
+      auto cmd = obj.bytes(1);
+      std::copy_n(capabilities.begin(), std::min(cmd.size(), capabilities.size()), cmd.begin());
+    }
+  }
+
+  // Sets status "error" on a command object whose execution failed (the write is refused).
+  AbortCode fail_command(uint16_t index) {
+    if (Object* o = od.find(index)) {
+      o->set_u(2, cmd::kStatusError);
+      auto resp = o->bytes(3);
+      std::fill(resp.begin(), resp.end(), 0);
+      if (!resp.empty()) resp[0] = cmd::kStatusError;
+    }
+    return AbortCode::CannotTransfer;
+  }
+
+  // Wraps the builder's byte-sequence check of a command object with `execute`, run once the
+  // bytes are accepted; `apply` runs after the write is committed.
+  void command_hooks(uint16_t index, std::function<AbortCode(std::span<const uint8_t>)> execute,
+                     std::function<void(Object&)> apply) {
+    Object* o = od.find(index);
+    auto check = o->hooks.validate_write;
+    o->hooks.validate_write = [this, check, execute](const Object& obj, int subindex,
+                                                     std::span<const uint8_t> data, EsmState s) {
+      if (AbortCode rc = check(obj, subindex, data, s); rc != AbortCode::None) return rc;
+      pending = PendingCommand{};
+      const auto cmd_bytes =
+          subindex == 1    ? data
+          : subindex == -1 ? data.subspan(obj.entry(1)->bit_offset / 8, obj.entry(1)->byte_length())
+                           : std::span<const uint8_t>{};
+      if (cmd_bytes.empty()) return AbortCode::None;
+      return execute(cmd_bytes);
+    };
+    o->hooks.after_write = [apply](Object& obj, int subindex) {
+      if (subindex == 1 || subindex == -1) apply(obj);
+    };
+  }
+
+  void install_hooks();
+};
+
+void Device::Impl::install_hooks() {
+  // 0x2000:08 Clock: the system clock plus the offset last written (not kept over a reset).
+  if (Object* o = od.find(0x2000)) {
+    o->hooks.before_read = [this](Object& obj, int subindex) {
+      if (subindex != 0x08 && subindex != -1) return;
+      const std::time_t t = std::time(nullptr) + clock_offset_s;
+      std::tm tm{};
+      gmtime_r(&t, &tm);
+      char buf[80];
+      std::snprintf(buf, sizeof buf, "%04d-%02d-%02d %02d:%02d:%02d", tm.tm_year + 1900,
+                    tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+      obj.set_string(0x08, buf);
+    };
+    o->hooks.after_write = [this](Object& obj, int subindex) {
+      if (subindex != 0x08 && subindex != -1) return;
+      const std::string text = obj.get_string(0x08);
+      if (is_valid_clock(text)) clock_offset_s = parse_clock(text) - std::time(nullptr);
+    };
+  }
+  // 0x1C12/0x1C13: a new assignment recompiles the process image (capacity reserved).
+  for (uint16_t index : {uint16_t{0x1C12}, uint16_t{0x1C13}}) {
+    od.find(index)->hooks.after_write = [this, index](Object&, int) {
+      (index == 0x1C12 ? outputs : inputs)->compile();
+    };
+  }
+  // 0x1C32/0x1C33: counters from the cyclic path; Get Cycle Time = 2 resets them.
+  for (int dir = 0; dir < 2; ++dir) {
+    Object* o = od.find(dir == 0 ? 0x1C32 : 0x1C33);
+    o->hooks.before_read = [this, dir](Object& obj, int) {
+      obj.set_u(0x0B, stats[dir].sm_event_missed);
+      obj.set_u(0x0C, stats[dir].cycle_time_too_small);
+      obj.set_u(0x20, stats[dir].sync_error ? 1 : 0);
+    };
+    o->hooks.after_write = [this, dir](Object& obj, int subindex) {
+      if ((subindex == 0x08 || subindex == -1) && obj.get_u(0x08) == 2) {
+        stats[dir] = SyncStatistics{};
+      }
+    };
+  }
+  od.find(0xF9F6)->hooks.before_read = [this](Object& obj, int) {
+    obj.set_u(0, static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::seconds>(
+                                           std::chrono::steady_clock::now() - power_on)
+                                           .count()));
+  };
+  od.find(0xF6F0)->hooks.before_read = [this](Object& obj, int) {
+    const uint32_t now = uptime_us();
+    for (uint8_t s = 1; s <= obj.sub0(); ++s) obj.set_u(s, now);
+  };
+
+  // 0xF002 Detect Modules: the detected list becomes the configured rack, then drivers remove
+  // what is offline (modules/, Detect Modules Override).
+  od.find(0xF002)->hooks.after_write = [this](Object& obj, int subindex) {
+    if (subindex != 1 && subindex != -1) return;
+    if (Object* detected = od.find(0xF050)) {
+      detected->image()[0] = static_cast<uint8_t>(config.modules.size());
+      for (const auto& m : config.modules) {
+        detected->set_u(static_cast<uint8_t>(m.number), m.card->module_ident);
+      }
+    }
+    notify([&](CycleListener& l) { l.on_detect_modules(*self); });
+    obj.set_u(2, cmd::kStatusDoneNoResponse);
+  };
+
+  // 0xFBF0 device / factory reset.
+  command_hooks(
+      0xFBF0,
+      [this](std::span<const uint8_t> c) {
+        pending.factory = c[5] == cmd::kFactoryReset;
+        if (pending.factory) {
+          std::string error;
+          if (!store->remove(error)) {
+            load_report = error;
+            return fail_command(0xFBF0);
+          }
+        }
+        return AbortCode::None;
+      },
+      [this](Object&) {
+        const bool factory = pending.factory;
+        power_on_reset();  // every object, 0xFBF0 included, back to power-on values
+        notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
+        notify([&](CycleListener& l) { l.on_device_reset(*self, factory); });
+      });
+  // 0xFBF1 exception reset.
+  command_hooks(
+      0xFBF1, [](std::span<const uint8_t>) { return AbortCode::None; },
+      [this](Object& obj) {
+        clear_latched();
+        notify([&](CycleListener& l) { l.on_exception_reset(*self); });
+        pending.status = cmd::kStatusDoneNoResponse;
+        finish_command(obj, {});
+      });
+  // 0xFBF2 store.
+  command_hooks(
+      0xFBF2,
+      [this](std::span<const uint8_t>) {
+        std::string error;
+        if (!store->save(params->fingerprint(), params->capture(), error)) {
+          load_report = error;
+          return fail_command(0xFBF2);
+        }
+        pending.status = cmd::kStatusDoneNoResponse;
+        return AbortCode::None;
+      },
+      [this](Object& obj) { finish_command(obj, cmd::kStoreCapabilities); });
+  // 0xFBF3 checksum over the parameters as stored at the time of the command.
+  command_hooks(
+      0xFBF3,
+      [this](std::span<const uint8_t> c) {
+        const std::vector<uint8_t> payload = stored_payload();
+        const uint8_t algo = c[0] == cmd::kChecksumDefault ? cmd::kChecksumMd5 : c[0];
+        if (algo == cmd::kChecksumCrc32) {
+          const uint32_t crc = static_cast<uint32_t>(
+              ::crc32(::crc32(0L, Z_NULL, 0), payload.data(), static_cast<uInt>(payload.size())));
+          pending.response = {static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8),
+                              static_cast<uint8_t>(crc >> 16), static_cast<uint8_t>(crc >> 24)};
+        } else {
+          pending.response = digest(algo == cmd::kChecksumMd5 ? EVP_md5() : EVP_sha1(), payload);
+        }
+        pending.status = cmd::kStatusDoneWithResponse;
+        return AbortCode::None;
+      },
+      [this](Object& obj) { finish_command(obj, cmd::kChecksumCapabilities); });
+  // 0xFBF4 load: the stored file, or the shipped defaults when nothing is stored.
+  command_hooks(
+      0xFBF4,
+      [this](std::span<const uint8_t>) {
+        std::string detail;
+        const auto r = store->load(params->fingerprint(), pending.payload, detail);
+        load_report = detail;
+        if (r == ParameterStore::LoadResult::Missing) {
+          pending.payload = default_payload;
+        } else if (r != ParameterStore::LoadResult::Loaded ||
+                   pending.payload.size() != params->payload_bytes()) {
+          return fail_command(0xFBF4);
+        }
+        pending.status = cmd::kStatusDoneNoResponse;
+        return AbortCode::None;
+      },
+      [this](Object& obj) {
+        params->apply(pending.payload);
+        outputs->compile();
+        inputs->compile();
+        finish_command(obj, cmd::kLoadCapabilities);
+        notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
+      });
+}
+
+Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_unique<Impl>()) {
+  Impl& d = *impl_;
+  d.self = this;
+  d.config = std::move(config);
+  d.listeners.reserve(16);
+  build_object_dictionary(d.config, d.od);
+  d.params = std::make_unique<ParameterSet>(d.od, d.config);
+  d.default_payload = d.params->capture();
+  d.state_dir = options.state_dir.empty() ? default_state_dir() : options.state_dir;
+  d.store = std::make_unique<ParameterStore>(d.state_dir + "/parameters.bin");
+  d.outputs = std::make_unique<ProcessImage>(d.od, 0x1C12);
+  d.inputs = std::make_unique<ProcessImage>(d.od, 0x1C13);
+  d.install_hooks();
+  if (options.load_stored_parameters) {
+    d.load_stored();
+    d.outputs->compile();
+    d.inputs->compile();
+  } else {
+    d.load_report = "stored parameters not loaded";
+  }
+  d.sdo = std::make_unique<coe::SdoServer>(d.od);
+}
+
+Device::~Device() = default;
+
+const RackConfig& Device::config() const {
+  return impl_->config;
+}
+coe::ObjectDictionary& Device::dictionary() {
+  return impl_->od;
+}
+const coe::ObjectDictionary& Device::dictionary() const {
+  return impl_->od;
+}
+std::span<const Module> Device::modules() const {
+  return impl_->config.modules;
+}
+
+size_t Device::handle_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
+  return impl_->sdo->handle(request, reply, impl_->state);
+}
+
+size_t Device::poll_mailbox(std::span<uint8_t> reply) {
+  return impl_->sdo->poll(reply);
+}
+
+bool Device::raise_emergency(uint16_t error_code, uint8_t error_register,
+                             std::array<uint8_t, 5> data) {
+  const size_t before = impl_->sdo->emergency_overruns();
+  impl_->sdo->queue_emergency(error_code, error_register, data);
+  return impl_->sdo->emergency_overruns() == before;
+}
+
+uint16_t Device::request_state(EsmState from, EsmState to) {
+  const bool entering_safeop = to == EsmState::SafeOp || to == EsmState::Op;
+  if (entering_safeop && (from == EsmState::PreOp || from == EsmState::Init) &&
+      module_lists_mismatch(impl_->od)) {
+    return kAlModuleIdentMismatch;
+  }
+  return 0;
+}
+
+void Device::state_changed(EsmState from, EsmState to) {
+  Impl& d = *impl_;
+  d.state = to;
+  if (to == EsmState::Init) d.sdo->reset();
+  if (to == EsmState::SafeOp && from == EsmState::PreOp) {
+    d.outputs->compile();
+    d.inputs->compile();
+  }
+  d.notify([&](CycleListener& l) { l.on_state_changed(*this, from, to); });
+}
+
+EsmState Device::state() const {
+  return impl_->state;
+}
+
+uint16_t Device::output_bytes() const {
+  return impl_->outputs->bytes();
+}
+uint16_t Device::input_bytes() const {
+  return impl_->inputs->bytes();
+}
+
+void Device::write_outputs(std::span<const uint8_t> sm2) {
+  Impl& d = *impl_;
+  d.outputs->to_objects(sm2);
+  d.notify([&](CycleListener& l) { l.on_outputs(*this); });
+}
+
+void Device::read_inputs(std::span<uint8_t> sm3) {
+  Impl& d = *impl_;
+  d.notify([&](CycleListener& l) { l.before_inputs(*this); });
+  // 0xF6F0/0xF6F2: the input latch time of every module is this update.
+  if (Object* local = d.od.find(0xF6F0)) {
+    const uint32_t now = d.uptime_us();
+    for (uint8_t s = 1; s <= local->sub0(); ++s) local->set_u(s, now);
+  }
+  if (Object* esc = d.od.find(0xF6F2)) {
+    for (uint8_t s = 1; s <= esc->sub0(); ++s) esc->set_u(s, d.last_sync_ns);
+  }
+  d.inputs->from_objects(sm3);
+}
+
+void Device::sync_event(int which, uint64_t system_time_ns) {
+  Impl& d = *impl_;
+  if (which == 0) d.last_sync_ns = system_time_ns;
+  d.notify([&](CycleListener& l) { l.on_sync(*this, which, system_time_ns); });
+}
+
+void Device::watchdog_expired() {
+  impl_->notify([&](CycleListener& l) { l.on_watchdog_expired(*this); });
+}
+
+SyncStatistics& Device::sync_statistics(bool outputs) {
+  return impl_->stats[outputs ? 0 : 1];
+}
+
+void Device::add_listener(CycleListener* listener) {
+  auto& v = impl_->listeners;
+  if (std::find(v.begin(), v.end(), listener) == v.end()) v.push_back(listener);
+}
+
+void Device::remove_listener(CycleListener* listener) {
+  auto& v = impl_->listeners;
+  v.erase(std::remove(v.begin(), v.end(), listener), v.end());
+}
+
+const std::string& Device::state_dir() const {
+  return impl_->state_dir;
+}
+std::string Device::parameter_file() const {
+  return impl_->store->path();
+}
+const std::string& Device::load_report() const {
+  return impl_->load_report;
+}
+
+}  // namespace rackcat::mdp

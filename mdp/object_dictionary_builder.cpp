@@ -1,0 +1,17 @@
+#include "mdp/object_dictionary_builder.hpp"
+
+namespace rackcat::mdp {
+
+void build_object_dictionary(const RackConfig& config, coe::ObjectDictionary& od) {
+  add_communication_objects(config, od);
+  add_device_info_objects(config, od);
+  add_safe_state_objects(config, od);
+  add_tc_uart_objects(config, od);
+  add_process_data_objects(config, od);
+  add_mdp_objects(config, od);
+  add_exception_objects(config, od);
+  add_cdp_objects(config, od);
+  add_command_objects(config, od);
+}
+
+}  // namespace rackcat::mdp

@@ -1,0 +1,56 @@
+// Builds the Fusion.IO object dictionary (guide Appendix A, ETG.5001 MDP, ETG.5003 CDP,
+// ETG.1000.6 communication area) for a rack configuration. The same function feeds the running
+// device (mdp::Device), the `od` command and the ESI/SII generators (esi/), so all of them
+// describe one dictionary.
+//
+// Validation hooks installed here capture `od` by reference: build into the dictionary that
+// will be used and do not move it afterwards. Behaviour that needs the running device (command
+// objects, clock, counters) is attached by mdp::Device on top.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "coe/abort_code.hpp"
+#include "coe/object_dictionary.hpp"
+#include "mdp/rack_config.hpp"
+
+namespace rackcat::mdp {
+
+void build_object_dictionary(const RackConfig& config, coe::ObjectDictionary& od);
+
+// The parts, one per area (mdp/objects_*.cpp), in index order.
+void add_communication_objects(const RackConfig& config,
+                               coe::ObjectDictionary& od);                          // 0x1000-0x1C33
+void add_device_info_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0x2000-0x3nn1
+void add_safe_state_objects(const RackConfig& config, coe::ObjectDictionary& od);   // 0x4nnX
+void add_tc_uart_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0x5nnX, 0x0800+
+void add_process_data_objects(const RackConfig& config,
+                              coe::ObjectDictionary& od);                         // 0x6nnX/0x7nnX
+void add_mdp_objects(const RackConfig& config, coe::ObjectDictionary& od);        // 0xF000-0xF050
+void add_exception_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0xF380-0xF3A8
+void add_cdp_objects(const RackConfig& config, coe::ObjectDictionary& od);        // 0xF6F0-0xF9F8
+void add_command_objects(const RackConfig& config, coe::ObjectDictionary& od);    // 0xFBF0-0xFBF4
+
+// 0x1C32/0x1C33:01 synchronisation types (ETG.1020 §8.2.2, ETG.1000.6 Table 67).
+inline constexpr uint16_t kSyncFreeRun = 0x00;
+inline constexpr uint16_t kSyncSmEvent = 0x01;  // SM2 event (0x1C32) / SM3 event (0x1C33)
+inline constexpr uint16_t kSyncDcSync0 = 0x02;
+inline constexpr uint16_t kSyncWithSm2 = 0x22;  // 0x1C33 only: inputs latched on the SM2 event
+inline constexpr uint16_t kSyncTypesSupported =
+    0x0007;  // free run | SM | DC SYNC0 (bits 4..2 = 001)
+
+// Bits a PDO mapping object maps (sum of its entries' lengths, subindex 1..sub0); 0 if the
+// object does not exist.
+uint32_t pdo_bits(const coe::ObjectDictionary& od, uint16_t pdo_index);
+// Checks a PDO assignment list for 0x1C12 (rx = true) or 0x1C13: every entry an existing
+// mapping object of the direction (else 0x06090030), no duplicates (0x06040043), total size
+// within the SM maximum (0x06040042).
+coe::AbortCode check_pdo_assignment(const coe::ObjectDictionary& od, bool rx,
+                                    std::span<const uint16_t> pdos);
+
+// The module ident lists: 0xF050 (detected) and 0xF030 (configured) as they stand; true when
+// 0xF030 is in use (subindex 0 != 0) and differs from 0xF050 (ETG.5001.1: AL status 0x0070).
+bool module_lists_mismatch(const coe::ObjectDictionary& od);
+
+}  // namespace rackcat::mdp

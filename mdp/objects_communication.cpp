@@ -1,0 +1,207 @@
+// Communication area 0x1000-0x1C33 (ETG.1000.6 §5.6.7.4; ETG.1020 §8 for 0x1C32/0x1C33; guide
+// Appendix A for 0x100B, the mapping objects and the assignment objects).
+#include <array>
+#include <cstring>
+
+#include "coe/bits.hpp"
+#include "mdp/card_catalogue.hpp"
+#include "mdp/object_dictionary_builder.hpp"
+#include "mdp/od_helpers.hpp"
+#include "mdp/sync_manager_layout.hpp"
+
+namespace rackcat::mdp {
+namespace {
+
+using namespace detail;
+using coe::AbortCode;
+
+// ETG.5001.1: device type of a modular device = profile 5001 (0x1389).
+constexpr uint32_t kDeviceTypeMdp = 0x00001389;
+constexpr uint8_t kMaxAssignEntries = 255;
+
+Object mapping_object(const Module& m, const IoLayout& layout) {
+  const uint16_t pdo = layout.output ? sm::rx_pdo_index(m.number) : sm::tx_pdo_index(m.number);
+  const uint16_t target =
+      m.index(layout.output ? 0x7000 : 0x6000, static_cast<uint8_t>(layout.kind));
+  Object o(pdo, ObjectCode::Record, std::string(layout.pdo_name), 0);
+  const uint8_t count = static_cast<uint8_t>(layout.entries + (layout.pad_bits ? 1 : 0));
+  o.add(sub0(count));
+  for (uint8_t s = 1; s <= layout.entries; ++s) {
+    const uint32_t value = (uint32_t{target} << 16) | (uint32_t{s} << 8) | layout.entry_bits;
+    o.add(num(s, layout.entry_name(s), DataType::Unsigned32, acc("ro"), value));
+  }
+  if (layout.pad_bits) {
+    // ETG.1000.6 §5.6.7.4.8: a gap in a PDO is mapped as index 0, subindex 0, length n.
+    o.add(num(static_cast<uint8_t>(layout.entries + 1), "Padding", DataType::Unsigned32, acc("ro"),
+              layout.pad_bits));
+  }
+  o.finalize();
+  return o;
+}
+
+// The candidate assignment list after a write to 0x1C12/0x1C13, without allocating.
+struct Assignment {
+  std::array<uint16_t, kMaxAssignEntries> pdo{};
+  uint8_t count = 0;
+};
+
+Assignment candidate(const Object& obj, int subindex, std::span<const uint8_t> data) {
+  std::array<uint8_t, 2 + 2 * kMaxAssignEntries> img{};
+  const auto cur = obj.image();
+  std::memcpy(img.data(), cur.data(), std::min(cur.size(), img.size()));
+  if (subindex == -1) {
+    std::memcpy(img.data(), data.data(), std::min(data.size(), img.size()));
+  } else if (subindex == 0) {
+    img[0] = data.empty() ? 0 : data[0];
+  } else if (const coe::Entry* e = obj.entry(static_cast<uint8_t>(subindex));
+             e && data.size() >= 2) {
+    img[e->bit_offset / 8] = data[0];
+    img[e->bit_offset / 8 + 1] = data[1];
+  }
+  Assignment a;
+  a.count = img[0];
+  for (uint8_t i = 0; i < a.count && i < kMaxAssignEntries; ++i) {
+    a.pdo[i] = coe::get_le16(&img[2 + 2 * i]);
+  }
+  return a;
+}
+
+bool is_mapping_object(const coe::ObjectDictionary& od, bool rx, uint16_t index) {
+  const uint16_t lo = rx ? 0x1600 : 0x1A00;
+  return index >= lo && index < lo + 0x200 && od.find(index) != nullptr;
+}
+
+Object assignment_object(const RackConfig& cfg, coe::ObjectDictionary& od, bool rx) {
+  Object o(rx ? 0x1C12 : 0x1C13, ObjectCode::Array, rx ? "RxPDO assign" : "TxPDO assign",
+           static_cast<uint16_t>(DataType::Unsigned16));
+  std::vector<uint16_t> defaults;
+  for (const auto& m : cfg.modules) {
+    if (rx && m.card->output) defaults.push_back(sm::rx_pdo_index(m.number));
+    if (!rx && m.card->input) defaults.push_back(sm::tx_pdo_index(m.number));
+  }
+  o.add(sub0(static_cast<uint8_t>(defaults.size()), acc("ro,wr_preop")));
+  for (uint16_t s = 1; s <= kMaxAssignEntries; ++s) {
+    const uint16_t def = s <= defaults.size() ? defaults[s - 1] : 0;
+    o.add(num(static_cast<uint8_t>(s), rx ? "Output assignment" : "Input assignment",
+              DataType::Unsigned16, acc("ro,wr_preop"), def));
+  }
+  o.finalize();
+  const coe::ObjectDictionary* dict = &od;
+  o.hooks.validate_write = [dict, rx](const Object& obj, int subindex,
+                                      std::span<const uint8_t> data, coe::EsmState) {
+    // A single entry must name a mapping object of this direction (or 0 to clear it).
+    if (subindex > 0 && data.size() >= 2) {
+      const uint16_t v = coe::get_le16(data.data());
+      if (v != 0 && !is_mapping_object(*dict, rx, v)) return AbortCode::ValueRange;
+    }
+    const Assignment a = candidate(obj, subindex, data);
+    return check_pdo_assignment(*dict, rx, std::span<const uint16_t>(a.pdo.data(), a.count));
+  };
+  return o;
+}
+
+Object sync_parameter_object(bool outputs) {
+  Object o(outputs ? 0x1C32 : 0x1C33, ObjectCode::Record,
+           outputs ? "SM output parameter" : "SM input parameter", 0);
+  o.add(sub0(0x20));
+  Entry type = num(0x01, "Synchronization Type", DataType::Unsigned16, acc("ro,wr_preop"),
+                   outputs ? kSyncSmEvent : kSyncWithSm2);
+  o.add(type);
+  o.add(num(0x02, "Cycle Time", DataType::Unsigned32, acc("ro,wr_preop"), 1000000));
+  o.add(num(0x03, "Shift Time", DataType::Unsigned32, acc("ro"), 0));
+  o.add(num(0x04, "Synchronization Types supported", DataType::Unsigned16, acc("ro"),
+            kSyncTypesSupported));
+  o.add(num(0x05, "Minimum Cycle Time", DataType::Unsigned32, acc("ro"), 250000));
+  o.add(num(0x06, "Calc and Copy Time", DataType::Unsigned32, acc("ro"), 20000));
+  o.add(num(0x07, "Minimum Delay Time", DataType::Unsigned32, acc("ro"), 0));
+  // 1 = measure the local cycle time, 2 = reset the counters (ETG.1020 §8.2.2 "Get Cycle Time").
+  o.add(ranged(0x08, "Get Cycle Time", DataType::Unsigned16, acc("rw"), 0, 0, 2));
+  o.add(num(0x09, "Delay Time", DataType::Unsigned32, acc("ro"), 0));
+  o.add(num(0x0A, "Sync0 Cycle Time", DataType::Unsigned32, acc("ro,wr_preop"), 0));
+  o.add(num(0x0B, "SM-Event Missed", DataType::Unsigned16, acc("ro"), 0));
+  o.add(num(0x0C, "Cycle Time Too Small", DataType::Unsigned16, acc("ro"), 0));
+  o.add(num(0x20, "Sync Error", DataType::Boolean, acc("ro"), 0));
+  o.finalize();
+  o.hooks.validate_write = [outputs](const Object& obj, int subindex, std::span<const uint8_t> data,
+                                     coe::EsmState) {
+    const auto v = written_bytes(obj, 0x01, subindex, data);
+    if (v.size() < 2) return AbortCode::None;
+    const uint16_t t = coe::get_le16(v.data());
+    const bool ok = t == kSyncFreeRun || t == kSyncSmEvent || t == kSyncDcSync0 ||
+                    (!outputs && t == kSyncWithSm2);
+    return ok ? AbortCode::None : AbortCode::ValueRange;
+  };
+  return o;
+}
+
+}  // namespace
+
+uint32_t pdo_bits(const coe::ObjectDictionary& od, uint16_t pdo_index) {
+  const Object* o = od.find(pdo_index);
+  if (!o) return 0;
+  uint32_t bits = 0;
+  for (uint8_t s = 1; s <= o->sub0(); ++s) bits += static_cast<uint32_t>(o->get_u(s) & 0xFF);
+  return bits;
+}
+
+coe::AbortCode check_pdo_assignment(const coe::ObjectDictionary& od, bool rx,
+                                    std::span<const uint16_t> pdos) {
+  uint64_t bits = 0;
+  for (size_t i = 0; i < pdos.size(); ++i) {
+    if (!is_mapping_object(od, rx, pdos[i])) return AbortCode::ValueRange;
+    for (size_t j = 0; j < i; ++j) {
+      if (pdos[j] == pdos[i]) return AbortCode::ParameterIncompatible;
+    }
+    bits += pdo_bits(od, pdos[i]);
+  }
+  if ((bits + 7) / 8 > sm::kMaxProcessDataBytes) return AbortCode::PdoLengthExceeded;
+  return AbortCode::None;
+}
+
+void add_communication_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
+  const ControlModule& cm = cfg.control;
+  od.add(var(0x1000, "Device type",
+             num(0, "Device type", DataType::Unsigned32, acc("ro"), kDeviceTypeMdp)));
+  auto text_var = [&](uint16_t index, const char* name, const std::string& value) {
+    od.add(var(
+        index, name,
+        str(0, name, static_cast<uint16_t>(std::max<size_t>(value.size(), 1)), acc("ro"), value)));
+  };
+  text_var(0x1008, "Manufacturer device name", cm.device_name);
+  text_var(0x1009, "Manufacturer hardware version", cm.hardware_version);
+  text_var(0x100A, "Manufacturer software version", cm.software_version);
+  // Guide Appendix A: STRING(6), default "1.09.0".
+  od.add(var(0x100B, "Manufacturer FW Bootloader Version",
+             str(0, "Manufacturer FW Bootloader Version", 6, acc("ro"), cm.bootloader_version)));
+
+  Object id(0x1018, ObjectCode::Record, "Identity", 0);
+  id.add(sub0(4));
+  id.add(num(1, "Vendor ID", DataType::Unsigned32, acc("ro"), cm.vendor_id));
+  id.add(num(2, "Product code", DataType::Unsigned32, acc("ro"), cm.product_code));
+  id.add(num(3, "Revision", DataType::Unsigned32, acc("ro"), cm.revision));
+  id.add(num(4, "Serial number", DataType::Unsigned32, acc("ro"), cm.serial));
+  od.add(std::move(id));
+
+  for (const auto& m : cfg.modules) {
+    if (m.card->output) od.add(mapping_object(m, *io_layout(*m.card->output, true)));
+  }
+  for (const auto& m : cfg.modules) {
+    if (m.card->input) od.add(mapping_object(m, *io_layout(*m.card->input, false)));
+  }
+
+  Object smt(0x1C00, ObjectCode::Array, "Sync manager type",
+             static_cast<uint16_t>(DataType::Unsigned8));
+  smt.add(sub0(4));
+  smt.add(num(1, "SM0 (mailbox out)", DataType::Unsigned8, acc("ro"), sm::kTypeMailboxOut));
+  smt.add(num(2, "SM1 (mailbox in)", DataType::Unsigned8, acc("ro"), sm::kTypeMailboxIn));
+  smt.add(num(3, "SM2 (outputs)", DataType::Unsigned8, acc("ro"), sm::kTypeOutputs));
+  smt.add(num(4, "SM3 (inputs)", DataType::Unsigned8, acc("ro"), sm::kTypeInputs));
+  od.add(std::move(smt));
+
+  od.add(assignment_object(cfg, od, true));
+  od.add(assignment_object(cfg, od, false));
+  od.add(sync_parameter_object(true));
+  od.add(sync_parameter_object(false));
+}
+
+}  // namespace rackcat::mdp

@@ -1,0 +1,48 @@
+// Process-data objects: inputs 0x6nn0..0x6nnC and outputs 0x7nn0..0x7nn3, 0x7nnB (guide
+// Appendix A), one per module with the layout of mdp/card_catalogue.cpp. Entries are TxPDO
+// (inputs, "ro") or RxPDO (outputs, "rw") mappable. Sample arrays ("ARRAY [0..7] OF UINT") are
+// OCTET_STRING entries of the array's size; DINx4/DOUTx4 pack BIT4 and a 4-bit pad.
+#include "mdp/card_catalogue.hpp"
+#include "mdp/object_dictionary_builder.hpp"
+#include "mdp/od_helpers.hpp"
+
+namespace rackcat::mdp {
+namespace {
+
+using namespace detail;
+
+Object io_object(const Module& m, const IoLayout& l) {
+  const bool has_pad = l.pad_bits != 0;
+  Object o(m.index(l.output ? 0x7000 : 0x6000, static_cast<uint8_t>(l.kind)),
+           has_pad ? ObjectCode::Record : ObjectCode::Array, std::string(l.name),
+           has_pad ? 0 : static_cast<uint16_t>(l.entry_type));
+  if (has_pad) o.set_packed(true);
+  const uint16_t a = l.output ? (acc("rw") | kRx) : (acc("ro") | kTx);
+  o.add(sub0(static_cast<uint8_t>(l.entries + (has_pad ? 1 : 0))));
+  for (uint8_t s = 1; s <= l.entries; ++s) {
+    Entry e;
+    e.subindex = s;
+    e.name = l.entry_name(s);
+    e.data_type = static_cast<uint16_t>(l.entry_type);
+    e.bit_length = l.entry_bits;
+    e.access = a;
+    e.default_value.assign((l.entry_bits + 7) / 8, 0);
+    o.add(std::move(e));
+  }
+  if (has_pad) o.add(pad(static_cast<uint8_t>(l.entries + 1), l.pad_bits));
+  o.finalize();
+  return o;
+}
+
+}  // namespace
+
+void add_process_data_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
+  for (const auto& m : cfg.modules) {
+    if (m.card->input) od.add(io_object(m, *io_layout(*m.card->input, false)));
+  }
+  for (const auto& m : cfg.modules) {
+    if (m.card->output) od.add(io_object(m, *io_layout(*m.card->output, true)));
+  }
+}
+
+}  // namespace rackcat::mdp
