@@ -120,7 +120,7 @@ def main():
     ap.add_argument("--slave-cmd", default=None,
                     help="slave command template (default: BUILD/ecat_wire_slave ...)")
     ap.add_argument("--samples", type=int, default=20000, help="per mode, frame and target")
-    ap.add_argument("--rounds", type=int, default=4)
+    ap.add_argument("--rounds", type=int, default=10)
     ap.add_argument("--slaves", type=int, default=1)
     ap.add_argument("--modes", default="blocking,busy-poll")
     args = ap.parse_args()
