@@ -28,8 +28,8 @@ use std::time::{Duration, Instant};
 
 /// Enough for a segment of 16 (ethercrab wants a power of two).
 const MAX_SUBDEVICES: usize = 32;
-/// Whole process image of the group, inputs and outputs.
-const MAX_PDI: usize = 4096;
+/// Whole process image of the group, inputs and outputs (16 default racks need ~16 KiB).
+const MAX_PDI: usize = 32768;
 const MAX_FRAMES: usize = 16;
 const MAX_PDU_DATA: usize = PduStorage::element_size(1100);
 
@@ -751,7 +751,7 @@ macro_rules! cycle_loop {
             ),
         );
         $r.info(format!(
-            "{} cycles in {:.2} s, slowest exchange {} us, {overruns} cycles overran the period",
+            "{} cycles in {:.2} s, slowest exchange {} us, {overruns} cycles without time left to wait",
             $o.cycles,
             total.as_secs_f64(),
             worst.as_micros()
