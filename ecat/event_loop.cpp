@@ -162,10 +162,13 @@ int EventLoop::run_blocking() {
       if (errno == EINTR) continue;
       return 1;
     }
+    if ((fds[0].revents | fds[1].revents | fds[2].revents) & POLLNVAL) return 1;
     if (ready == 0) continue;
     // One frame per wake-up: if more are queued ppoll returns at once, and we save the
     // receive call that would only report "empty".
-    if (fds[0].revents & POLLIN) {
+    // POLLERR (the interface went down): the receive call consumes the pending error, so the
+    // loop does not spin on it; frames flow again when the interface comes back.
+    if (fds[0].revents & (POLLIN | POLLERR)) {
       const auto frame = link_.try_receive();
       if (!frame.empty()) handle_frame(frame);
     }

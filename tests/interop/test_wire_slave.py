@@ -186,3 +186,33 @@ def test_missing_permission_is_one_line_and_exit_2(slave_cmd):
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "permission" in lines[0], r.stderr
+
+
+@pytest.mark.parametrize("mode", ["blocking", "busy-poll"])
+def test_process_data_watchdog_expires_without_frames(ecat_segment, mode):
+    """In OP, the master stops sending process data: with no frame arriving at all, the
+    slave's loop must still expire the SM2 watchdog (default 100 ms) on time and fall to
+    SAFEOP with the error flag and AL status code 0x001B."""
+    extra = ["--busy-poll"] if mode == "busy-poll" else []
+    iface, slave = ecat_segment(slaves=1, extra_args=extra)
+    master = open_master(iface, 1)
+    try:
+        master.config_map()
+        to_op(master)
+        for _ in range(50):
+            master.send_processdata()
+            master.receive_processdata(RECEIVE_TIMEOUT_US)
+            time.sleep(CYCLE_S)
+        time.sleep(0.5)  # silence on the wire: five watchdog periods
+        master.read_state()
+        s = master.slaves[0]
+        assert s.state == pysoem.SAFEOP_STATE | pysoem.STATE_ERROR, hex(s.state)
+        assert s.al_status == 0x001B, hex(s.al_status)
+        # Acknowledge, then back to INIT.
+        s.state = pysoem.SAFEOP_STATE | pysoem.STATE_ACK
+        s.write_state()
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    assert slave.stop() == 0, slave.log()
+    assert _field(slave.log(), "watchdog expiries:").split() == ["1"]
