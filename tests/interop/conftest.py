@@ -134,7 +134,7 @@ def probe_brd(iface, timeout_s=10.0):
 class SlaveProcess:
     """The slave program running in the namespace, with its log and optional capture."""
 
-    def __init__(self, ns, cmd_template, slaves, extra_args, pcap, log_path):
+    def __init__(self, ns, cmd_template, slaves, extra_args, pcap, log_path, prefix=()):
         self.ns = ns
         self.pcap = pcap
         self.log_path = log_path
@@ -145,7 +145,9 @@ class SlaveProcess:
             cmd += ["--pcap", str(pcap)]
         self.cmd = cmd
         self._log = open(log_path, "w")
-        self.proc = subprocess.Popen(ns.exec_prefix() + cmd, stdout=self._log,
+        # `ip netns exec` and the optional prefix (setpriv ...) exec into the slave: the
+        # process id is the slave's own.
+        self.proc = subprocess.Popen(ns.exec_prefix() + list(prefix) + cmd, stdout=self._log,
                                      stderr=subprocess.STDOUT)
         self.returncode = None
 
@@ -182,7 +184,9 @@ def slave_cmd(request):
 
 @pytest.fixture
 def ecat_segment(slave_cmd, tmp_path):
-    """Factory: ecat_segment(slaves=1, extra_args=(), pcap=True) -> (master_iface, slave).
+    """Factory: ecat_segment(slaves=1, extra_args=(), pcap=True, prefix=()) ->
+    (master_iface, slave). `prefix` goes before the command (e.g. setpriv to start it as
+    another user).
 
     Starts the slave in a fresh namespace and waits until it answers on the wire. Everything
     is torn down after the test.
@@ -190,12 +194,13 @@ def ecat_segment(slave_cmd, tmp_path):
     require_root()
     started = []
 
-    def start(slaves=1, extra_args=(), pcap=True):
+    def start(slaves=1, extra_args=(), pcap=True, prefix=()):
         ns = VethNamespace().__enter__()
         started.append(ns)
         n = len(started)
         cap = tmp_path / f"segment{n}.pcap" if pcap else None
-        slave = SlaveProcess(ns, slave_cmd, slaves, extra_args, cap, tmp_path / f"slave{n}.log")
+        slave = SlaveProcess(ns, slave_cmd, slaves, extra_args, cap, tmp_path / f"slave{n}.log",
+                             prefix)
         started.append(slave)
         slave.wait_ready(slaves)
         return ns.master_iface, slave
@@ -206,6 +211,15 @@ def ecat_segment(slave_cmd, tmp_path):
             item.stop()
         else:
             item.__exit__(None, None, None)
+
+
+def proc_status(pid):
+    """/proc/PID/status as a dict (Uid, CapEff, ...)."""
+    fields = {}
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        key, _, value = line.partition(":")
+        fields[key] = value.strip()
+    return fields
 
 
 def tshark_problems(pcap):

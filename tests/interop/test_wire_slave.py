@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from conftest import BUILD, tshark_problems
+from conftest import proc_status, tshark_problems
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem not installed (scripts/setup.sh)")
 
@@ -75,6 +75,8 @@ def test_config_init_reads_identity_and_eeprom(ecat_segment, slave_cmd, slaves):
     image = sii_image(slave_cmd)
     vendor, product, revision = struct.unpack_from("<III", image, 0x08 * 2)
     iface, slave = ecat_segment(slaves=slaves)
+    # Started as root: once the socket is open the slave holds no capability.
+    assert int(proc_status(slave.proc.pid)["CapEff"], 16) == 0
     master = open_master(iface, slaves)
     try:
         for i, s in enumerate(master.slaves):
@@ -216,3 +218,20 @@ def test_process_data_watchdog_expires_without_frames(ecat_segment, mode):
         master.close()
     assert slave.stop() == 0, slave.log()
     assert _field(slave.log(), "watchdog expiries:").split() == ["1"]
+
+
+def test_runs_as_unprivileged_user_with_only_cap_net_raw(ecat_segment):
+    """Started as nobody with CAP_NET_RAW alone (what a setcap'd binary gets), the slave
+    opens its socket, keeps no capability afterwards and a master still reaches PREOP."""
+    prefix = ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
+              "--inh-caps=-all,+net_raw", "--ambient-caps=-all,+net_raw", "--"]
+    iface, slave = ecat_segment(slaves=1, prefix=prefix, pcap=False)
+    status = proc_status(slave.proc.pid)
+    assert status["Uid"].split()[0] == "65534"
+    assert int(status["CapEff"], 16) == 0 and int(status["CapPrm"], 16) == 0
+    master = open_master(iface, 1)
+    try:
+        assert master.slaves[0].state == pysoem.PREOP_STATE
+    finally:
+        master.close()
+    assert slave.stop() == 0, slave.log()
