@@ -1,0 +1,172 @@
+// Distributed clocks (ETG.1000.4 §6.10, §9): receive-time latches with the line's propagation
+// delays, local/system time, offset and delay, the FRMW compare into 0x092C and the control
+// loop, SYNC0/SYNC1 generation on a manual clock.
+#include <gtest/gtest.h>
+
+#include "ecat/registers.hpp"
+#include "tests/ecat/test_master.hpp"
+
+namespace rackcat::ecat::test {
+namespace {
+
+TEST(DistributedClock, ReceiveTimesFollowTheLine) {
+  Line line(3);
+  line.to_preop();
+  line.clock.advance(5'000'000);
+  EXPECT_EQ(line.master->send(Command::Bwr, 0, 0x0900, {0, 0, 0, 0}).wkc, 3);
+  // Defaults: 320 ns forward through a slave, 280 ns back, 10 ns per cable. Slave 0 sees the
+  // frame return at port 1 after it went through slaves 1 and 2: 330 + (320 + 20 + 320 + 280)
+  // + 10 ns; slave 1 after slave 2 only: 330 + 320 + 10 ns.
+  const uint32_t p0_0 = line.master->fprd32(Line::station(0), 0x0900);
+  const uint32_t p1_0 = line.master->fprd32(Line::station(0), 0x0904);
+  const uint32_t p0_1 = line.master->fprd32(Line::station(1), 0x0900);
+  const uint32_t p1_1 = line.master->fprd32(Line::station(1), 0x0904);
+  EXPECT_EQ(p1_0 - p0_0, 1280u);
+  EXPECT_EQ(p1_1 - p0_1, 660u);
+  EXPECT_EQ(line.master->fprd32(Line::station(2), 0x0904), 0u);  // no link on port 1
+  // 0x0918: 64-bit local time at the processing unit, same instant as port 0.
+  const uint64_t r0 = line.master->fprd64(Line::station(0), 0x0918);
+  const uint64_t r1 = line.master->fprd64(Line::station(1), 0x0918);
+  EXPECT_EQ(static_cast<uint32_t>(r0), p0_0);
+  // Local clocks started at power-up: slave 1 powered up 1'234'567 ns "earlier" and sees the
+  // frame 330 ns later.
+  EXPECT_EQ(r0, 5'000'000u);
+  EXPECT_EQ(r1, 5'000'000u + 1'234'567u + 330u);
+}
+
+TEST(DistributedClock, SystemTimeIsLocalTimePlusOffset) {
+  Line line(1);
+  line.to_preop();
+  const uint64_t t1 = line.master->fprd64(0x1001, 0x0910);
+  line.clock.advance(1000);
+  EXPECT_EQ(line.master->fprd64(0x1001, 0x0910), t1 + 1000);
+  line.master->fpwr64(0x1001, 0x0920, 1'000'000'000'000ull);
+  EXPECT_EQ(line.master->fprd64(0x1001, 0x0910), t1 + 1000 + 1'000'000'000'000ull);
+  EXPECT_EQ(line.esc(0).system_time(line.clock.now_ns()), t1 + 1000 + 1'000'000'000'000ull);
+}
+
+struct DriftTest : ::testing::Test {
+  DriftTest() : line(2) {
+    line.to_preop();
+    line.master->send(Command::Bwr, 0, 0x0900, {0, 0, 0, 0});
+    const uint64_t r0 = line.master->fprd64(Line::station(0), 0x0918);
+    const uint64_t r1 = line.master->fprd64(Line::station(1), 0x0918);
+    // Master side of ETG.1000.4 §9.1.3: align slave 1 to the reference (slave 0), with the
+    // propagation delay of 330 ns between them.
+    offset1 = r0 + 330 - r1;
+    line.master->fpwr64(Line::station(1), 0x0920, offset1);
+    line.master->fpwr32(Line::station(1), 0x0928, 330);
+  }
+  uint32_t frmw() {
+    line.master->send(Command::Frmw, Line::station(0), 0x0910, std::vector<uint8_t>(8, 0));
+    return line.master->fprd32(Line::station(1), 0x092C);
+  }
+  Line line;
+  uint64_t offset1 = 0;
+};
+
+TEST_F(DriftTest, AlignedClocksShowNoDifference) {
+  const auto r =
+      line.master->send(Command::Frmw, Line::station(0), 0x0910, std::vector<uint8_t>(8, 0));
+  EXPECT_EQ(r.wkc, 2);  // reference reads, slave 1 writes
+  EXPECT_EQ(line.master->fprd32(Line::station(1), 0x092C), 0u);
+}
+
+TEST_F(DriftTest, DifferenceIsReportedAndCompensated) {
+  line.master->fpwr64(Line::station(1), 0x0920, offset1 - 500);  // slave 1 runs 500 ns behind
+  // Bit 31: the local copy is smaller than the received time; bits 30:0: 500 ns.
+  EXPECT_EQ(frmw(), 0x80000000u | 500u);
+  uint32_t diff = 0;
+  for (int i = 0; i < 20; ++i) diff = frmw();
+  EXPECT_LE(diff & 0x7FFFFFFF, 1u);
+}
+
+TEST_F(DriftTest, HugeDifferenceIsReportedButNotFollowed) {
+  // SOEM's reset write of 0 to 0x0910 (5 s after power-up): reported, clock not stepped.
+  line.clock.advance(5'000'000'000);
+  const uint64_t before = line.esc(1).local_time(line.clock.now_ns());
+  line.master->send(Command::Bwr, 0, 0x0910, {0, 0, 0, 0});
+  EXPECT_EQ(line.esc(1).local_time(line.clock.now_ns()), before);
+  EXPECT_NE(line.master->fprd32(Line::station(1), 0x092C), 0u);
+}
+
+TEST(DistributedClock, Sync0FiresEveryCycle) {
+  Line line(1);
+  line.to_preop();
+  const uint64_t now = line.master->fprd64(0x1001, 0x0910);
+  const uint64_t start = now + 1'000'000;
+  line.master->fpwr64(0x1001, 0x0990, start);
+  line.master->fpwr32(0x1001, 0x09A0, 1'000'000);
+  line.master->fpwr8(0x1001, 0x0981, 0x03);
+  EXPECT_EQ(line.master->fprd8(0x1001, 0x0984) & 0x01, 0x01);  // first pulse pending
+  EXPECT_EQ(line.segment->next_sync_event_ns(), line.clock.now_ns() + 1'000'000);
+  for (int i = 0; i < 10; ++i) {
+    line.clock.advance(1'000'000);
+    line.segment->service();
+  }
+  auto& syncs = line.app(0).syncs;
+  ASSERT_EQ(syncs.size(), 10u);
+  for (size_t i = 0; i < syncs.size(); ++i) {
+    EXPECT_EQ(syncs[i], std::make_pair(0, start + i * 1'000'000));
+  }
+  EXPECT_EQ(line.master->fprd64(0x1001, 0x0990), start + 10'000'000);  // next pulse
+  EXPECT_EQ(line.master->fprd8(0x1001, 0x098E) & 0x01, 0x01);
+  EXPECT_EQ(line.master->fprd8(0x1001, 0x0984) & 0x01, 0x00);
+}
+
+TEST(DistributedClock, LateServiceFiresOnceForTheLatestPulse) {
+  Line line(1);
+  line.to_preop();
+  const uint64_t start = line.master->fprd64(0x1001, 0x0910) + 1'000'000;
+  line.master->fpwr64(0x1001, 0x0990, start);
+  line.master->fpwr32(0x1001, 0x09A0, 1'000'000);
+  line.master->fpwr8(0x1001, 0x0981, 0x03);
+  line.clock.advance(10'500'000);
+  line.segment->service();
+  ASSERT_EQ(line.app(0).syncs.size(), 1u);
+  EXPECT_EQ(line.app(0).syncs[0].second, start + 9'000'000);
+  EXPECT_EQ(line.segment->next_sync_event_ns(), line.clock.now_ns() + 500'000);
+}
+
+TEST(DistributedClock, Sync1FollowsSync0ByItsCycleTime) {
+  Line line(1);
+  line.to_preop();
+  const uint64_t start = line.master->fprd64(0x1001, 0x0910) + 1'000'000;
+  line.master->fpwr64(0x1001, 0x0990, start);
+  line.master->fpwr32(0x1001, 0x09A0, 1'000'000);
+  line.master->fpwr32(0x1001, 0x09A4, 200'000);
+  line.master->fpwr8(0x1001, 0x0981, 0x07);
+  line.clock.advance(1'000'000);
+  line.segment->service();
+  EXPECT_EQ(line.segment->next_sync_event_ns(), line.clock.now_ns() + 200'000);
+  line.clock.advance(200'000);
+  line.segment->service();
+  const std::vector<std::pair<int, uint64_t>> expected = {{0, start}, {1, start + 200'000}};
+  EXPECT_EQ(line.app(0).syncs, expected);
+}
+
+TEST(DistributedClock, StartTimeInThePastStartsAtNextCycle) {
+  Line line(1);
+  line.to_preop();
+  const uint64_t now = line.master->fprd64(0x1001, 0x0910);
+  line.master->fpwr64(0x1001, 0x0990, now - 2'500'000);
+  line.master->fpwr32(0x1001, 0x09A0, 1'000'000);
+  line.master->fpwr8(0x1001, 0x0981, 0x03);
+  EXPECT_EQ(line.master->fprd64(0x1001, 0x0990), now + 500'000);
+}
+
+TEST(DistributedClock, DeactivationStopsSync) {
+  Line line(1);
+  line.to_preop();
+  line.master->fpwr64(0x1001, 0x0990, line.master->fprd64(0x1001, 0x0910) + 1000);
+  line.master->fpwr32(0x1001, 0x09A0, 1'000'000);
+  line.master->fpwr8(0x1001, 0x0981, 0x03);
+  line.master->fpwr8(0x1001, 0x0981, 0x00);
+  EXPECT_EQ(line.segment->next_sync_event_ns(), UINT64_MAX);
+  line.clock.advance(5'000'000);
+  line.segment->service();
+  EXPECT_TRUE(line.app(0).syncs.empty());
+}
+
+}  // namespace
+}  // namespace rackcat::ecat::test

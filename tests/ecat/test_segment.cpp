@@ -1,0 +1,86 @@
+// A line of 16 slaves: position addressing, cyclic LRW + FRMW with the expected working
+// counters, process data to and from every device, ports and loop control.
+#include <gtest/gtest.h>
+
+#include "ecat/registers.hpp"
+#include "tests/ecat/test_master.hpp"
+
+namespace rackcat::ecat::test {
+namespace {
+
+TEST(Segment, SixteenSlavesCyclicExchange) {
+  Line line(16);
+  line.to_op();
+  for (size_t k = 0; k < 16; ++k) {
+    ASSERT_EQ(line.esc(k).al_state(), AlState::Op) << k;
+    line.app(k).inputs_value = {static_cast<uint8_t>(k),       1, 2, 3, 4,
+                                static_cast<uint8_t>(0xF0 | k)};
+  }
+  std::vector<uint8_t> outputs;
+  for (size_t k = 0; k < 16; ++k) {
+    for (uint8_t b = 0; b < kOutputBytes; ++b) outputs.push_back(static_cast<uint8_t>(k * 16 + b));
+  }
+  const auto r = line.cycle(outputs);
+  // SOEM's expected WKC: 2 x output slaves + input slaves; FRMW: 1 read + 15 writes.
+  EXPECT_EQ(r[0].wkc, 16 * 3);
+  EXPECT_EQ(r[1].wkc, 16);
+  for (size_t k = 0; k < 16; ++k) {
+    const std::vector<uint8_t> mine(outputs.begin() + static_cast<long>(k * kOutputBytes),
+                                    outputs.begin() + static_cast<long>((k + 1) * kOutputBytes));
+    EXPECT_EQ(line.app(k).last_outputs, mine) << k;
+    const size_t at = 16 * kOutputBytes + k * kInputBytes;
+    EXPECT_EQ(std::vector<uint8_t>(r[0].data.begin() + static_cast<long>(at),
+                                   r[0].data.begin() + static_cast<long>(at + kInputBytes)),
+              line.app(k).inputs_value)
+        << k;
+  }
+}
+
+TEST(Segment, PositionAddressingReachesEverySlave) {
+  Line line(16);
+  for (uint16_t k = 0; k < 16; ++k) {
+    const auto r = line.master->send(Command::Apwr, static_cast<uint16_t>(0 - k), 0x0F80,
+                                     {static_cast<uint8_t>(k)});
+    EXPECT_EQ(r.wkc, 1);
+    EXPECT_EQ(r.adp, static_cast<uint16_t>(16 - k));
+  }
+  for (uint16_t k = 0; k < 16; ++k) EXPECT_EQ(line.esc(k).read8(0x0F80), k);
+}
+
+TEST(Segment, ClosedPortCutsTheLine) {
+  Line line(3);
+  line.to_preop();
+  // Slave 1 closes port 1 (DL control 0x0101 bits 3:2 = 11b): slave 2 sees no more frames.
+  line.master->fpwr8(Line::station(1), 0x0101, 0x0C);
+  EXPECT_EQ(line.master->send(Command::Brd, 0, 0x0000, {0, 0}).wkc, 2);
+  EXPECT_EQ(line.master->fprd16(Line::station(1), 0x0110) & 0x0400, 0x0400);  // loop closed
+  line.master->fpwr8(Line::station(1), 0x0101, 0x00);
+  EXPECT_EQ(line.master->send(Command::Brd, 0, 0x0000, {0, 0}).wkc, 3);
+}
+
+TEST(Segment, DlStatusChangeRaisesEvent) {
+  Line line(2);
+  line.to_preop();
+  line.master->fprd16(Line::station(0), 0x0110);  // clears the event
+  EXPECT_EQ(line.master->fprd16(Line::station(0), 0x0210) & 0x0004, 0);
+  line.master->fpwr8(Line::station(0), 0x0101, 0x0C);
+  EXPECT_EQ(line.master->fprd16(Line::station(0), 0x0210) & 0x0004, 0x0004);
+}
+
+TEST(Segment, SlaveAccessors) {
+  Line line(2);
+  EXPECT_EQ(line.segment->size(), 2u);
+  EXPECT_EQ(&line.segment->slave(1).application(), &line.app(1));
+  EXPECT_THROW(line.segment->slave(2), std::out_of_range);
+  EXPECT_THROW(Segment({}, line.clock), std::invalid_argument);
+}
+
+TEST(Segment, NextEventIsTheEarliestOfAllSlaves) {
+  Line line(2);
+  EXPECT_EQ(line.segment->next_event_ns(), UINT64_MAX);
+  line.to_op();
+  EXPECT_EQ(line.segment->next_event_ns(), line.clock.now_ns() + 100'000'000);
+}
+
+}  // namespace
+}  // namespace rackcat::ecat::test
