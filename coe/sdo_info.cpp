@@ -92,7 +92,8 @@ size_t SdoServer::describe_entry(const Object& obj, const Entry& e, uint8_t valu
   }
   if (value_info & sdo_info::kValueDefault) {
     std::memset(p + pos, 0, len);
-    std::memcpy(p + pos, e.default_value.data(), std::min(len, e.default_value.size()));
+    if (!e.default_value.empty())
+      std::memcpy(p + pos, e.default_value.data(), std::min(len, e.default_value.size()));
     pos += len;
     given |= sdo_info::kValueDefault;
   }
@@ -132,36 +133,22 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
       if (list_type > sdo_info::kListSettings)
         return info_error(reply, AbortCode::UnsupportedAccess);
       if (list_type == sdo_info::kListLengths) {
-        // §5.6.3.3.2: list type 0 answers with the length of lists 1..5.
-        uint8_t* b = reply.data() + kBodyOffset;
-        b[0] = sdo_info::kGetOdListResponse;
-        b[1] = 0;
-        put_le16(b + 2, 0);
-        put_le16(b + 4, list_type);
-        for (uint16_t t = 1; t <= 5; ++t)
-          put_le16(b + 4 + 2 * t, static_cast<uint16_t>(list_count(t)));
-        return finish_coe(reply, sdo_info::kHeaderSize + 12, kService);
+        // §5.6.3.3.2: list type 0 answers with the length of lists 1..5 (fragmented like any
+        // other answer when the mailbox is small).
+        uint8_t* p = info_buf_.data();
+        put_le16(p, list_type);
+        for (uint16_t t = 1; t <= 5; ++t) put_le16(p + 2 * t, static_cast<uint16_t>(list_count(t)));
+        return start_fragments(reply, InfoKind::Buffer, sdo_info::kGetOdListResponse, 12, fragment);
       }
-      info_ = {};
-      info_.kind = InfoKind::List;
-      info_.opcode = sdo_info::kGetOdListResponse;
-      info_.list_type = list_type;
-      info_.total = 2 + 2 * list_count(list_type);
-      info_.fragment_size = fragment;
-      info_.fragments_left = static_cast<uint16_t>((info_.total + fragment - 1) / fragment - 1);
-      return info_fragment(reply);
+      return start_fragments(reply, InfoKind::List, sdo_info::kGetOdListResponse,
+                             2 + 2 * list_count(list_type), fragment, list_type);
     }
     case sdo_info::kGetObjectDescriptionRequest: {
       if (data.size() < 2) return mailbox_error(reply, MailboxError::SizeTooShort, 0);
       const Object* obj = od_.find(get_le16(data.data()));
       if (!obj) return info_error(reply, AbortCode::ObjectNotFound);
-      info_ = {};
-      info_.kind = InfoKind::Buffer;
-      info_.opcode = sdo_info::kGetObjectDescriptionResponse;
-      info_.total = describe_object(*obj);
-      info_.fragment_size = fragment;
-      info_.fragments_left = static_cast<uint16_t>((info_.total + fragment - 1) / fragment - 1);
-      return info_fragment(reply);
+      return start_fragments(reply, InfoKind::Buffer, sdo_info::kGetObjectDescriptionResponse,
+                             describe_object(*obj), fragment);
     }
     case sdo_info::kGetEntryDescriptionRequest: {
       if (data.size() < 4) return mailbox_error(reply, MailboxError::SizeTooShort, 0);
@@ -169,13 +156,8 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
       if (!obj) return info_error(reply, AbortCode::ObjectNotFound);
       const Entry* e = obj->entry(data[2]);
       if (!e || e->padding) return info_error(reply, AbortCode::SubindexNotFound);
-      info_ = {};
-      info_.kind = InfoKind::Buffer;
-      info_.opcode = sdo_info::kGetEntryDescriptionResponse;
-      info_.total = describe_entry(*obj, *e, data[3]);
-      info_.fragment_size = fragment;
-      info_.fragments_left = static_cast<uint16_t>((info_.total + fragment - 1) / fragment - 1);
-      return info_fragment(reply);
+      return start_fragments(reply, InfoKind::Buffer, sdo_info::kGetEntryDescriptionResponse,
+                             describe_entry(*obj, *e, data[3]), fragment);
     }
     case sdo_info::kErrorRequest:
       // The master aborts a fragmented answer: stop sending, no reply.
@@ -184,6 +166,18 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
     default:
       return info_error(reply, AbortCode::CommandSpecifier);
   }
+}
+
+size_t SdoServer::start_fragments(std::span<uint8_t> reply, InfoKind kind, uint8_t opcode,
+                                  size_t total, size_t fragment, uint16_t list_type) {
+  info_ = {};
+  info_.kind = kind;
+  info_.opcode = opcode;
+  info_.list_type = list_type;
+  info_.total = total;
+  info_.fragment_size = fragment;
+  info_.fragments_left = static_cast<uint16_t>((total + fragment - 1) / fragment - 1);
+  return info_fragment(reply);
 }
 
 size_t SdoServer::info_fragment(std::span<uint8_t> reply) {

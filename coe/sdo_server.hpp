@@ -112,6 +112,8 @@ class SdoServer {
   // SDO Information (sdo_info.cpp).
   size_t sdo_info(std::span<const uint8_t> body, std::span<uint8_t> reply);
   size_t info_error(std::span<uint8_t> reply, AbortCode code);
+  size_t start_fragments(std::span<uint8_t> reply, InfoKind kind, uint8_t opcode, size_t total,
+                         size_t fragment, uint16_t list_type = 0);
   size_t info_fragment(std::span<uint8_t> reply);
   size_t list_count(uint16_t list_type) const;
   bool in_list(const Object& obj, uint16_t list_type) const;

@@ -163,3 +163,31 @@ TEST_F(SdoTest, MasterErrorRequestOrNewRequestStopsFragments) {
 
 }  // namespace
 }  // namespace rackcat::coe::test
+
+namespace rackcat::coe::test {
+namespace {
+
+TEST_F(SdoTest, OdListLengthsFragmentInTheSmallestMailbox) {
+  // A 16-byte mailbox leaves 4 bytes per fragment: list type 0 + 5 counts = 12 bytes = 3.
+  Bytes f = payload(info({0x01, 0x00, 0x00, 0x00, 0x00, 0x00}, 16));
+  EXPECT_EQ(f, (Bytes{0x00, 0x80, 0x82, 0x00, 0x02, 0x00, 0x00, 0x00, 22, 0x00}));
+  EXPECT_EQ(payload(poll(16)), (Bytes{0x00, 0x80, 0x82, 0x00, 0x01, 0x00, 1, 0, 1, 0}));
+  EXPECT_EQ(payload(poll(16)), (Bytes{0x00, 0x80, 0x02, 0x00, 0x00, 0x00, 1, 0, 1, 0}));
+}
+
+}  // namespace
+}  // namespace rackcat::coe::test
+
+namespace rackcat::coe::test {
+namespace {
+
+TEST_F(SdoTest, EntryDescriptionDefaultOfAnEntryWithoutDefaultIsZero) {
+  // 0x2009 has no default value: the default field is the entry's size in zeros.
+  const Bytes d = payload(info({0x05, 0x00, 0x00, 0x00, 0x09, 0x20, 0x00, 0x10}));
+  EXPECT_EQ(Bytes(d.begin() + 6, d.begin() + 17),
+            (Bytes{0x09, 0x20, 0x00, 0x10, 0x05, 0x00, 0x08, 0x00, 0x3F, 0x00, 0x00}));
+  EXPECT_EQ(std::string(d.begin() + 17, d.end()), "Hooked");
+}
+
+}  // namespace
+}  // namespace rackcat::coe::test
