@@ -117,6 +117,8 @@ struct CardType {
   std::optional<SafeStateKind> safe_state;  // 0x4nnX
   bool thermocouple_ohms;                   // 0x5nn4
   bool uart;                                // 0x5nn5..0x5nnE
+  // 0x3nn1:01: the physical card's type, the name without a "/X8" variant suffix.
+  std::string_view io_card_type() const { return name.substr(0, name.find('/')); }
   // False for the rows that exist only in Table 5 (variants a config selects by name or by
   // card ID plus `oversampling: 8`, and the 8-channel digital input without a Table 3 ID).
   bool in_table3;

@@ -74,10 +74,18 @@ bool is_mapping_object(const coe::ObjectDictionary& od, bool rx, uint16_t index)
 Object assignment_object(const RackConfig& cfg, coe::ObjectDictionary& od, bool rx) {
   Object o(rx ? 0x1C12 : 0x1C13, ObjectCode::Array, rx ? "RxPDO assign" : "TxPDO assign",
            static_cast<uint16_t>(DataType::Unsigned16));
+  // Default: every module's PDO of this direction in module order, as long as the total fits
+  // the SM maximum (a rack of 120 oversampled analog cards has more than 16 KiB of inputs; the
+  // master then assigns the subset it wants).
   std::vector<uint16_t> defaults;
+  uint32_t bits = 0;
   for (const auto& m : cfg.modules) {
-    if (rx && m.card->output) defaults.push_back(sm::rx_pdo_index(m.number));
-    if (!rx && m.card->input) defaults.push_back(sm::tx_pdo_index(m.number));
+    const auto kind = rx ? m.card->output : m.card->input;
+    if (!kind) continue;
+    const uint32_t pdo_bits = io_layout(*kind, rx)->object_bits();
+    if ((bits + pdo_bits + 7) / 8 > sm::kMaxProcessDataBytes) break;
+    bits += pdo_bits;
+    defaults.push_back(rx ? sm::rx_pdo_index(m.number) : sm::tx_pdo_index(m.number));
   }
   o.add(sub0(static_cast<uint8_t>(defaults.size()), acc("ro,wr_preop")));
   for (uint16_t s = 1; s <= kMaxAssignEntries; ++s) {

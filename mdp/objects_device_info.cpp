@@ -95,7 +95,7 @@ Object module_information(const Module& m) {
   const CardType& c = *m.card;
   Object o(m.index(0x3000, 1), ObjectCode::Record, "Module Information", 0);
   o.add(sub0(9));
-  o.add(str(0x01, "IO Card Type", 8, acc("ro"), c.name));
+  o.add(str(0x01, "IO Card Type", 8, acc("ro"), c.io_card_type()));
   o.add(str(0x02, "Description", 32, acc("ro"), c.description));
   o.add(num(0x03, "Number Of Channels", DataType::Integer16, acc("ro"), c.channels));
   o.add(num(0x04, "RIM Number", DataType::Integer8, acc("ro"), m.rim));

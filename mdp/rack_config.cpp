@@ -370,7 +370,6 @@ class Parser {
               [](const Rim& a, const Rim& b) { return a.number < b.number; });
     number_modules(cfg);
     resolve_loopbacks(cfg);
-    check_process_data(cfg);
     return cfg;
   }
 
@@ -427,24 +426,6 @@ class Parser {
           }
           ref.module = src->number;
         }
-      }
-    }
-  }
-
-  void check_process_data(const RackConfig& cfg) const {
-    size_t in_bits = 0;
-    size_t out_bits = 0;
-    for (const auto& m : cfg.modules) {
-      if (m.card->input) in_bits += io_layout(*m.card->input, false)->object_bytes() * 8;
-      if (m.card->output) out_bits += io_layout(*m.card->output, true)->object_bytes() * 8;
-      const int at = cfg.slot_card(m).line;
-      if (in_bits / 8 > 0x4000) {
-        fail_line(at, "inputs of modules 1.." + std::to_string(m.number) +
-                          " exceed the 16384-byte SM3 maximum");
-      }
-      if (out_bits / 8 > 0x4000) {
-        fail_line(at, "outputs of modules 1.." + std::to_string(m.number) +
-                          " exceed the 16384-byte SM2 maximum");
       }
     }
   }
