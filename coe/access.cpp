@@ -51,6 +51,13 @@ std::optional<uint16_t> from_guide(std::string_view text) {
   return std::nullopt;
 }
 
+std::string_view to_guide(uint16_t bits) {
+  const uint16_t rw = bits & (kReadAll | kWriteAll);
+  for (const auto& g : kGuide)
+    if (g.bits == rw) return g.text;
+  return {};
+}
+
 bool can_read(uint16_t bits, EsmState s) {
   return (bits & state_bit(kReadPreOp, s)) != 0;
 }

@@ -40,6 +40,9 @@ inline constexpr uint16_t kWo = kWriteAll;
 
 // Parses the guide's notation ("ro", "rw", "ro,wr_preop", "ro,wr_op", "wo"); nullopt otherwise.
 std::optional<uint16_t> from_guide(std::string_view text);
+// The guide's notation for the read/write bits of `bits` (PDO/backup/settings flags ignored);
+// empty when the combination has no guide spelling (e.g. written in SAFEOP only).
+std::string_view to_guide(uint16_t bits);
 bool can_read(uint16_t bits, EsmState s);
 bool can_write(uint16_t bits, EsmState s);
 }  // namespace access

@@ -76,7 +76,9 @@ size_t SdoServer::download_initiate(std::span<const uint8_t> body, std::span<uin
   const uint8_t subindex = body[3];
   const bool ca = (cmd & sdo::kCompleteAccess) != 0;
   Object* obj = od_.find(index);
-  if (!obj) return abort(reply, index, subindex, AbortCode::ObjectNotFound);
+  if (!obj)
+    return abort(reply, index, subindex,
+                 od_.size() ? AbortCode::ObjectNotFound : AbortCode::NoDictionary);
 
   AbortCode rc = AbortCode::None;
   if (cmd & sdo::kExpedited) {

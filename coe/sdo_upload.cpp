@@ -24,7 +24,9 @@ size_t SdoServer::upload_initiate(std::span<const uint8_t> body, std::span<uint8
   const uint8_t subindex = body[3];
   const bool ca = (cmd & sdo::kCompleteAccess) != 0;
   Object* obj = od_.find(index);
-  if (!obj) return abort(reply, index, subindex, AbortCode::ObjectNotFound);
+  if (!obj)
+    return abort(reply, index, subindex,
+                 od_.size() ? AbortCode::ObjectNotFound : AbortCode::NoDictionary);
 
   uint8_t* b = reply.data() + kBodyOffset;
   const uint8_t ca_bit = ca ? sdo::kCompleteAccess : 0;

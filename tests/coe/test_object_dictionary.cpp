@@ -155,3 +155,18 @@ TEST(ObjectDictionary, AddFinalizesAnUnfinalizedObject) {
 
 }  // namespace
 }  // namespace rackcat::coe
+
+namespace rackcat::coe {
+namespace {
+
+TEST(Access, ToGuideSpellsTheGuideColumn) {
+  using namespace access;
+  EXPECT_EQ(to_guide(kRo | kTxPdoMappable), "ro");
+  EXPECT_EQ(to_guide(kRoWrPreOp), "ro,wr_preop");
+  EXPECT_EQ(to_guide(kRoWrOp | kBackup), "ro,wr_op");
+  EXPECT_EQ(to_guide(kRw), "rw");
+  EXPECT_EQ(to_guide(kReadAll | kWriteSafeOp), "");
+}
+
+}  // namespace
+}  // namespace rackcat::coe

@@ -133,3 +133,18 @@ TEST_F(SdoTest, BeforeReadHookRefreshesLiveValue) {
 
 }  // namespace
 }  // namespace rackcat::coe::test
+
+namespace rackcat::coe::test {
+namespace {
+
+TEST(SdoServerEmpty, NoDictionaryAbort) {
+  ObjectDictionary empty;
+  SdoServer server(empty);
+  const Bytes request = coe_message(1, 2, upload_req(0x1000, 0));
+  Bytes reply(128);
+  reply.resize(server.handle(request, reply, EsmState::PreOp));
+  EXPECT_EQ(payload(reply), abort_payload(0x1000, 0, 0x08000023));
+}
+
+}  // namespace
+}  // namespace rackcat::coe::test
