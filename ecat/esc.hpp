@@ -87,6 +87,12 @@ class Esc {
   // closed by DL control 0x0101 (ETG.1000.4 §6.3.1: 11b = closed, 01b = auto-close).
   bool forwards_to_port1() const;
 
+  // The local application reports an error (ETG.1000.6 §5.3.3, "local error"): the ESM falls
+  // to `fall_to` if that is below the current state (never rises), sets the error flag and
+  // `code` in 0x0134 until the master acknowledges. E.g. a RIM lost with Detect Modules
+  // Override 0 in OP: SAFEOP with the device's code.
+  void application_error(AlState fall_to, uint16_t code);
+
   // ---- observers (tests, CLI, the link) -------------------------------------------------------
   AlState al_state() const { return state_; }
   bool al_error() const;
@@ -153,7 +159,7 @@ class Esc {
   void sm_activation_written(int index, uint8_t old_activate);
   void set_sm_pdi_deactivated(int index, bool deactivated);
   void mailbox_service();
-  void update_ecat_events();
+  void update_ecat_event(int index);
   // sii.cpp: EEPROM interface.
   void sii_load_image();
   void sii_reload_config_area();

@@ -68,7 +68,7 @@ void Esc::reload_sm(int n) {
       !ecat_writes(s.control)) {
     repeat_pending_ = true;  // the master lost a reply and asks for it again
   }
-  update_ecat_events();
+  update_ecat_event(n);
 }
 
 void Esc::set_sm_pdi_deactivated(int n, bool deactivated) {
@@ -105,7 +105,6 @@ bool Esc::sm_allows_read(uint16_t address, uint16_t len) {
 void Esc::sm_after_read(uint16_t address, uint16_t len) {
   if (sm_enabled_mask_ == 0) return;
   const uint32_t end = static_cast<uint32_t>(address) + len;
-  bool changed = false;
   for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
     const int n = __builtin_ctz(mask);
     const SmState& s = sm_[n];
@@ -119,9 +118,8 @@ void Esc::sm_after_read(uint16_t address, uint16_t len) {
     } else {
       status = static_cast<uint8_t>((status & ~kStatusWritten) | kStatusRead);
     }
-    changed = true;
+    update_ecat_event(n);
   }
-  if (changed) update_ecat_events();
 }
 
 bool Esc::sm_allows_write(uint16_t address, uint16_t len) {
@@ -144,7 +142,6 @@ bool Esc::sm_allows_write(uint16_t address, uint16_t len) {
 void Esc::sm_after_write(uint16_t address, uint16_t len) {
   if (sm_enabled_mask_ == 0) return;
   const uint32_t end = static_cast<uint32_t>(address) + len;
-  bool changed = false;
   for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
     const int n = __builtin_ctz(mask);
     const SmState& s = sm_[n];
@@ -152,16 +149,17 @@ void Esc::sm_after_write(uint16_t address, uint16_t len) {
     // Writing the last byte hands the buffer over (ETG.1000.4 §6.7.1, §6.7.2).
     if (!ecat_writes(s.control) || !(address < s_end && end >= s_end)) continue;
     uint8_t& status = mem_[sm_base(n) + reg::kSmStatusOffset];
-    changed = true;
     if (is_mailbox(s.control)) {
       status = static_cast<uint8_t>((status & ~kStatusRead) | kStatusFull | kStatusWritten);
       if (n == kMailboxIn) mailbox_work_ = true;
+      update_ecat_event(n);
       continue;
     }
     // Buffered: the written buffer becomes the newest; report its index in bits 5:4.
     status = static_cast<uint8_t>((status & ~(kStatusNoBuffer | kStatusRead)) |
                                   (sm_[n].next_buffer << 4) | kStatusWritten);
     sm_[n].next_buffer = static_cast<uint8_t>((sm_[n].next_buffer + 1) % 3);
+    update_ecat_event(n);
     if (n != kOutputs) continue;
     if (s.control & 0x40) watchdog_trigger(pass_.port0_ns);
     if (state_ == AlState::Op && outputs_.size() == s.length) {
@@ -169,7 +167,6 @@ void Esc::sm_after_write(uint16_t address, uint16_t len) {
       app_.on_outputs(outputs_);
     }
   }
-  if (changed) update_ecat_events();
 }
 
 void Esc::mailbox_service() {
@@ -194,7 +191,7 @@ void Esc::mailbox_service() {
       out_status = static_cast<uint8_t>((out_status & ~kStatusRead) | kStatusFull | kStatusWritten);
     }
     mem_[sm_base(kMailboxOut) + reg::kSmPdiControlOffset] ^= 0x02;
-    update_ecat_events();
+    update_ecat_event(kMailboxOut);
     return;
   }
   if (out_status & kStatusFull) return;  // the master has not read the last reply yet
@@ -206,24 +203,28 @@ void Esc::mailbox_service() {
   if (in_ok && (in_status & kStatusFull)) {
     n = app_.on_mailbox(std::span<const uint8_t>(&mem_[in.start], in.length), reply);
     in_status = static_cast<uint8_t>((in_status & ~(kStatusFull | kStatusWritten)) | kStatusRead);
+    update_ecat_event(kMailboxIn);
   }
   if (n == 0) n = app_.poll_mailbox(reply);
-  if (n != 0) publish(std::min<size_t>(n, out.length));
-  update_ecat_events();
+  if (n != 0) {
+    publish(std::min<size_t>(n, out.length));
+    update_ecat_event(kMailboxOut);
+  }
 }
 
-void Esc::update_ecat_events() {
+void Esc::update_ecat_event(int n) {
   // ECAT event request bits 4-11 mirror SyncManagers 0-7 whose ECAT event is enabled
   // (control bit 4): a read buffer the PDI has filled, a write buffer the PDI has emptied.
-  uint16_t events = le::get16(&mem_[reg::kEcatEventRequest]) & 0xF00F;
-  for (int n = 0; n < 8; ++n) {
-    const SmState& s = sm_[n];
-    if (!s.enabled || (s.control & 0x10) == 0) continue;
+  if (n >= 8) return;
+  const SmState& s = sm_[n];
+  bool pending = false;
+  if (s.enabled && (s.control & 0x10)) {
     const uint8_t status = mem_[sm_base(n) + reg::kSmStatusOffset];
-    const bool pending =
-        ecat_writes(s.control) ? (status & kStatusRead) : (status & kStatusWritten);
-    if (pending) events |= static_cast<uint16_t>(0x0010 << n);
+    pending = ecat_writes(s.control) ? (status & kStatusRead) : (status & kStatusWritten);
   }
+  uint16_t events = le::get16(&mem_[reg::kEcatEventRequest]);
+  const auto bit = static_cast<uint16_t>(0x0010 << n);
+  events = static_cast<uint16_t>(pending ? (events | bit) : (events & ~bit));
   le::put16(&mem_[reg::kEcatEventRequest], events);
 }
 

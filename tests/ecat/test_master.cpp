@@ -248,13 +248,13 @@ std::vector<uint8_t> hex(std::string_view text, size_t pad_to) {
   return out;
 }
 
-Line::Line(size_t n, SegmentOptions options) {
+Line::Line(size_t n, SegmentOptions options, const Clock* time) {
   std::vector<Application*> ptrs;
   for (size_t i = 0; i < n; ++i) {
     apps.push_back(std::make_unique<TestApplication>());
     ptrs.push_back(apps.back().get());
   }
-  segment = std::make_unique<Segment>(ptrs, clock, options);
+  segment = std::make_unique<Segment>(ptrs, time != nullptr ? *time : clock, options);
   master = std::make_unique<TestMaster>(*segment);
 }
 

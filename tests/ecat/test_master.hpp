@@ -98,7 +98,8 @@ std::vector<uint8_t> hex(std::string_view text, size_t pad_to = 60);
 
 // A line of N test devices on a manual clock, with a master, and shortcuts to the states.
 struct Line {
-  explicit Line(size_t n, SegmentOptions options = {});
+  // `time` replaces the manual clock (benchmarks run on SteadyClock).
+  explicit Line(size_t n, SegmentOptions options = {}, const Clock* time = nullptr);
   Esc& esc(size_t i) { return segment->slave(i).esc(); }
   TestApplication& app(size_t i) { return *apps.at(i); }
   static uint16_t station(size_t i) { return static_cast<uint16_t>(0x1001 + i); }
