@@ -3,6 +3,7 @@
 // Codes follow modules/analog_scale.hpp with the card's 0x3nn1:08/09 voltage range.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "modules/analog_scale.hpp"
@@ -16,8 +17,10 @@ AnalogScale module_scale(coe::ObjectDictionary& od, const mdp::Module& m) {
   AnalogScale s{m.card->min_voltage, m.card->max_voltage};
   if (const coe::Object* info = od.find(m.index(0x3000, 1))) {
     if (info->entry(8) && info->entry(9)) {
-      s.min_v = read_real32(*info, 8);
-      s.max_v = read_real32(*info, 9);
+      // Appendix A has 08 = max, 09 = min, Table 6 the other way round: take them by value.
+      const double a = read_real32(*info, 8), b = read_real32(*info, 9);
+      s.min_v = std::min(a, b);
+      s.max_v = std::max(a, b);
     }
   }
   if (!(s.max_v > s.min_v)) {
