@@ -65,6 +65,8 @@ AbortCode SdoServer::write_complete(Object& obj, uint8_t subindex, std::span<con
   if (obj.code() == ObjectCode::Var) return AbortCode::CompleteAccessUnsupported;
   if (subindex > 1) return AbortCode::UnsupportedAccess;
   const auto image = obj.image();
+  // The candidate image lives in a buffer sized at start-up (prepare()).
+  if (image.size() > scratch_.size()) return AbortCode::OutOfMemory;
   const uint8_t max_sub = obj.max_subindex();
   uint8_t last = ca_last_subindex(obj);
   if (subindex == 0) {

@@ -45,6 +45,7 @@ AbortCode SdoServer::write_entry(Object& obj, const Entry& e, std::span<const ui
   if (data.size() > len) return AbortCode::LengthTooHigh;
   // A shorter VISIBLE_STRING is a shorter text: the rest of the entry is padded with 0.
   if (data.size() < len && e.type() != DataType::VisibleString) return AbortCode::LengthTooLow;
+  if (len > scratch_.size()) return AbortCode::OutOfMemory;  // buffers sized by prepare()
   uint8_t* value = scratch_.data();
   std::memmove(value, data.data(), data.size());
   std::memset(value + data.size(), 0, len - data.size());

@@ -85,6 +85,8 @@ size_t SdoServer::describe_entry(const Object& obj, const Entry& e, uint8_t valu
   size_t pos = 10;
   uint8_t given = 0;
   const size_t len = e.byte_length();
+  // Values of an entry larger than the buffer sized by prepare() are left out (bits cleared).
+  if (10 + 2 + 3 * len > info_buf_.size()) value_info &= sdo_info::kValueUnitType;
   if (value_info & sdo_info::kValueUnitType) {
     put_le16(p + pos, e.unit_type);
     pos += 2;

@@ -38,9 +38,9 @@ void SdoServer::reset() {
   last_reply_len_ = 0;
 }
 
-void SdoServer::queue_emergency(uint16_t error_code, uint8_t error_register,
+bool SdoServer::queue_emergency(uint16_t error_code, uint8_t error_register,
                                 std::array<uint8_t, 5> data) {
-  emergencies_.push(Emergency{error_code, error_register, data});
+  return emergencies_.push(Emergency{error_code, error_register, data});
 }
 
 size_t SdoServer::finish(std::span<uint8_t> reply, size_t data_length, MailboxType type) {

@@ -47,15 +47,18 @@ class SdoServer {
   size_t poll(std::span<uint8_t> reply);
   bool has_pending() const { return !emergencies_.empty() || info_.kind != InfoKind::None; }
 
-  // Queues an Emergency (CoE service 1). Never allocates; a full queue drops the oldest.
-  void queue_emergency(uint16_t error_code, uint8_t error_register,
+  // Queues an Emergency (CoE service 1). Never allocates and takes no lock: one thread may
+  // queue while the mailbox thread calls handle()/poll(). A full queue (kEmergencySlots)
+  // keeps its messages and counts the new one in emergency_overruns(); returns false then.
+  bool queue_emergency(uint16_t error_code, uint8_t error_register,
                        std::array<uint8_t, 5> data = {});
-  void queue_emergency(const Emergency& e) { emergencies_.push(e); }
+  bool queue_emergency(const Emergency& e) { return emergencies_.push(e); }
   size_t pending_emergencies() const { return emergencies_.size(); }
   size_t emergency_overruns() const { return emergencies_.overruns(); }
 
   // Drops transfer, fragment and repeat state (e.g. the ESM went back to INIT: the mailbox
-  // restarts and so does the master's counter). Queued emergencies stay.
+  // restarts and so does the master's counter). Queued emergencies stay. handle(), poll() and
+  // reset() belong to one thread (the mailbox side).
   void reset();
   // Re-sizes the transfer buffers after objects were added (start-up only: allocates).
   void prepare();

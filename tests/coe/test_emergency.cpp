@@ -1,5 +1,8 @@
 // Emergency messages (ETG.1000.6 §5.6.4) and the mailbox counter / repeat rules
 // (ETG.1000.4 §5.6).
+#include <thread>
+
+#include "coe/emergency_queue.hpp"
 #include "tests/coe/sdo_fixture.hpp"
 
 namespace rackcat::coe::test {
@@ -14,11 +17,43 @@ TEST_F(SdoTest, EmergencyGoldenBytes) {
   EXPECT_TRUE(poll().empty());
 }
 
-TEST_F(SdoTest, EmergencyQueueIsAFixedRingDroppingTheOldest) {
-  for (uint16_t i = 0; i < SdoServer::kEmergencySlots + 1; ++i) server.queue_emergency(i, 0);
+TEST_F(SdoTest, EmergencyQueueIsAFixedRingCountingOverruns) {
+  for (uint16_t i = 0; i < SdoServer::kEmergencySlots; ++i)
+    EXPECT_TRUE(server.queue_emergency(i, 0));
+  EXPECT_FALSE(server.queue_emergency(0xFFFF, 0));
   EXPECT_EQ(server.pending_emergencies(), SdoServer::kEmergencySlots);
   EXPECT_EQ(server.emergency_overruns(), 1u);
-  EXPECT_EQ(payload(poll())[2], 0x01);  // code 0 was dropped
+  for (uint16_t i = 0; i < SdoServer::kEmergencySlots; ++i) {
+    const Bytes p = payload(poll());
+    EXPECT_EQ(p[2] | (p[3] << 8), i);  // in order, the overrun one never appears
+  }
+  EXPECT_TRUE(poll().empty());
+  EXPECT_TRUE(server.queue_emergency(0x1234, 0));  // room again
+}
+
+TEST(EmergencyQueue, OneProducerThreadOneConsumer) {
+  EmergencyQueue<4> q;
+  constexpr uint16_t kCount = 2000;
+  std::thread producer([&] {
+    for (uint16_t i = 0; i < kCount;) {
+      if (q.push(Emergency{i, 0, {}}))
+        ++i;
+      else
+        std::this_thread::yield();
+    }
+  });
+  uint16_t expected = 0;
+  Emergency e;
+  while (expected < kCount) {
+    if (q.pop(e)) {
+      ASSERT_EQ(e.error_code, expected);
+      ++expected;
+    } else {
+      std::this_thread::yield();
+    }
+  }
+  producer.join();
+  EXPECT_TRUE(q.empty());
 }
 
 TEST_F(SdoTest, EmergencyGoesBeforeQueuedFragments) {

@@ -201,3 +201,26 @@ TEST_F(SdoTest, WriteOfABitEntryKeepsItsNeighbours) {
 
 }  // namespace
 }  // namespace rackcat::coe::test
+
+namespace rackcat::coe::test {
+namespace {
+
+TEST_F(SdoTest, WritesToObjectsLargerThanThePreparedBuffersAbortCleanly) {
+  // Added after the server was built and without prepare(): the staging buffers are too small.
+  std::vector<uint64_t> values(1000, 0);
+  od.add(
+      array(0x5000, "Big", DataType::Unsigned32, 32, 250, access::kRw, access::kRw, values, 250));
+  od.add(var(0x5001, "Big string", DataType::OctetString, 8 * 2000, access::kRw));
+  EXPECT_EQ(payload(sdo(download_normal(0x5000, 0, {0x00, 0x00}, true))),
+            abort_payload(0x5000, 0, 0x05040005));
+  EXPECT_EQ(payload(sdo(download_normal(0x5001, 0, Bytes(100, 1), false, 2000))),
+            abort_payload(0x5001, 0, 0x05040005));
+  const Bytes d = payload(info({0x05, 0x00, 0x00, 0x00, 0x01, 0x50, 0x00, 0x10}));
+  EXPECT_EQ(d[9], 0x00);  // no room for a 2000-byte default: value info cleared
+  server.prepare();
+  EXPECT_EQ(payload(sdo(download_normal(0x5000, 0, {0x00, 0x00}, true))),
+            download_ok(0x5000, 0, true));
+}
+
+}  // namespace
+}  // namespace rackcat::coe::test
