@@ -1,26 +1,33 @@
 #!/usr/bin/env python3
-"""Round-trip latency of EtherCAT frames over a veth pair: our slave against the floor.
+"""Round-trip latency of EtherCAT frames over veth: the slave under test against the floor.
 
-Creates a private network namespace holding a veth pair (ecat-slave, ecat-master). On the
-slave end it runs, in turn, (a) bench/ecat/echo_responder, which only bumps working counters
-(the floor: a raw socket and nothing else), and (b) the slave under test; on the master end
-bench/ecat/wire_pinger sends one frame at a time and times each round trip. Both wait modes
-(blocking receive, busy-poll) are measured; the targets alternate in several rounds so that
-machine noise hits both alike. Prints p50/p90/p99 per mode, frame and target, and the ratios
-of the slave to the floor (target: p50 and p99 within 1.3x).
+Creates a private network namespace with two veth pairs. On one pair runs the floor,
+bench/ecat/echo_responder (a raw socket that only bumps working counters); on the other the
+slave under test (build/ecat_wire_slave by default). bench/ecat/wire_pinger sends one frame at
+a time from the master ends and times each round trip.
+
+  blocking mode   both responders sleep in the kernel; the pinger alternates frame by frame
+                  between the two pairs, so both see exactly the same machine noise.
+  busy-poll mode  each responder spins on its socket; two spinners would starve each other on
+                  a 2-core machine, so the targets run one at a time in alternating rounds. The
+                  pinger itself blocks unless --pinger-busy-poll.
+
+Frames: BRD of register 0x0000 (2 bytes) and LRW of 8 bytes per slave, which the pinger first
+maps onto each slave's process RAM with FMMU0 so the FMMU path is exercised. Prints p50/p90/p99
+per mode, frame and target, frames lost (no reply in 10 ms) and the ratios of the slave to the
+floor (target: p50 and p99 within 1.3x). Exit status 1 when a ratio is over 1.3.
 
     sudo scripts/wire_bench.py [--build-dir build] [--samples 20000] [--slaves 1]
         [--slave-cmd "build/ecat_wire_slave --iface {iface} --slaves {slaves}"]
 
 The slave command is a template ({iface}, {slaves}); --busy-poll is appended in busy-poll
-mode. Frames: BRD of register 0x0000 (2 bytes) and LRW of 8 bytes per slave, which the pinger
-first maps onto each slave's process RAM with FMMU0 so the FMMU path is exercised.
+mode. The same works for `build/rackcat run --iface {iface}`.
 """
 import argparse
+import json
 import os
 import shlex
 import signal
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -29,8 +36,8 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 NS = f"rackcat-bench-{os.getpid()}"
-SLAVE_IF = "ecat-slave"
-MASTER_IF = "ecat-master"
+PAIRS = {"slave": ("ecat-slave", "ecat-master"), "floor": ("echo-slave", "echo-master")}
+FRAMES = ("brd", "lrw")
 
 
 def sh(*cmd, check=True):
@@ -40,11 +47,12 @@ def sh(*cmd, check=True):
 
 def netns_up():
     sh("ip", "netns", "add", NS)
-    sh("ip", "-n", NS, "link", "add", SLAVE_IF, "type", "veth", "peer", "name", MASTER_IF)
-    for i in (SLAVE_IF, MASTER_IF):
-        sh("ip", "netns", "exec", NS, "sysctl", "-qw", f"net.ipv6.conf.{i}.disable_ipv6=1",
-           check=False)
-        sh("ip", "-n", NS, "link", "set", i, "up")
+    for a, b in PAIRS.values():
+        sh("ip", "-n", NS, "link", "add", a, "type", "veth", "peer", "name", b)
+        for i in (a, b):
+            sh("ip", "netns", "exec", NS, "sysctl", "-qw", f"net.ipv6.conf.{i}.disable_ipv6=1",
+               check=False)
+            sh("ip", "-n", NS, "link", "set", i, "up")
     sh("ip", "-n", NS, "link", "set", "lo", "up")
 
 
@@ -64,10 +72,12 @@ def find(build, name):
     sys.exit(f"wire_bench: {name} not found under {build}; build the target '{name}' first")
 
 
-class Target:
-    def __init__(self, cmd, log):
-        self.log = log
-        self.proc = subprocess.Popen(["ip", "netns", "exec", NS] + cmd, stdout=log,
+class Responder:
+    def __init__(self, name, cmd, log_dir):
+        self.name = name
+        self.log_path = log_dir / f"{name}.log"
+        self.log = open(self.log_path, "a")
+        self.proc = subprocess.Popen(["ip", "netns", "exec", NS] + cmd, stdout=self.log,
                                      stderr=subprocess.STDOUT)
 
     def stop(self):
@@ -78,34 +88,47 @@ class Target:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
-        return self.proc.returncode
+        self.log.close()
+        if self.proc.returncode != 0:
+            raise RuntimeError(f"{self.name} exited with {self.proc.returncode}: "
+                               f"{self.log_path.read_text()[-2000:]}")
 
 
-def ping(pinger, frame, count, slaves, busy, samples_file, setup_fmmu=False, warmup=200):
-    cmd = ["ip", "netns", "exec", NS, str(pinger), "--iface", MASTER_IF, "--frame", frame,
-           "--count", str(count), "--warmup", str(warmup), "--slaves", str(slaves),
-           "--lrw-bytes", "8", "--samples-out", str(samples_file)]
-    if busy:
-        cmd.append("--busy-poll")
-    if setup_fmmu:
-        cmd.append("--setup-fmmu")
-    r = sh(*cmd, check=False)
-    if r.returncode != 0:
-        raise RuntimeError(f"pinger failed: {r.stderr.strip()}")
-    return r.stdout
+class Pinger:
+    def __init__(self, path, slaves, busy, tmp):
+        self.path, self.slaves, self.busy, self.tmp = path, slaves, busy, tmp
 
+    def run(self, names, frame, count, warmup=200):
+        """Pings the master ends of `names` in turn; returns {name: (samples_ns, lost)}."""
+        out_file = self.tmp / "samples"
+        cmd = ["ip", "netns", "exec", NS, str(self.path),
+               "--iface", ",".join(PAIRS[n][1] for n in names), "--frame", frame,
+               "--count", str(count), "--warmup", str(warmup), "--slaves", str(self.slaves),
+               "--lrw-bytes", "8", "--samples-out", str(out_file)]
+        if self.busy:
+            cmd.append("--busy-poll")
+        if frame == "lrw":
+            cmd.append("--setup-fmmu")
+        r = sh(*cmd, check=False)
+        if r.returncode != 0:
+            raise RuntimeError(f"pinger failed: {r.stderr.strip()}")
+        lines = [json.loads(line) for line in r.stdout.splitlines() if line.strip()]
+        result = {}
+        for k, (name, line) in enumerate(zip(names, lines)):
+            f = out_file if len(names) == 1 else Path(f"{out_file}.{k}")
+            result[name] = ([int(x) for x in f.read_text().split()], line["lost"])
+        return result
 
-def wait_answering(pinger, slaves, busy, tmp):
-    deadline = time.monotonic() + 10
-    while time.monotonic() < deadline:
-        try:
-            out = ping(pinger, "brd", 1, slaves, busy, tmp / "probe.txt", warmup=0)
-            if '"lost":0' in out:
-                return
-        except RuntimeError:
-            pass
-        time.sleep(0.05)
-    raise RuntimeError("target did not answer within 10 s")
+    def wait_answering(self, names, timeout_s=10):
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            try:
+                if all(lost == 0 for _, lost in self.run(names, "brd", 1, warmup=0).values()):
+                    return
+            except RuntimeError:
+                pass
+            time.sleep(0.05)
+        raise RuntimeError(f"{names} did not answer within {timeout_s} s")
 
 
 def pct(values, p):
@@ -123,59 +146,76 @@ def main():
     ap.add_argument("--rounds", type=int, default=10)
     ap.add_argument("--slaves", type=int, default=1)
     ap.add_argument("--modes", default="blocking,busy-poll")
+    ap.add_argument("--pinger-busy-poll", action="store_true",
+                    help="the pinger spins too in busy-poll mode")
     args = ap.parse_args()
     if os.geteuid() != 0:
-        sys.exit("wire_bench: needs root (network namespace, veth pair, raw sockets)")
+        sys.exit("wire_bench: needs root (network namespace, veth pairs, raw sockets)")
     build = Path(args.build_dir).resolve()
     echo = find(build, "echo_responder")
-    pinger = find(build, "wire_pinger")
+    pinger_path = find(build, "wire_pinger")
     slave_cmd = args.slave_cmd or f"{build}/ecat_wire_slave --iface {{iface}} --slaves {{slaves}}"
     modes = [m for m in args.modes.split(",") if m]
     per_round = max(1, args.samples // args.rounds)
 
+    def command(name, busy):
+        iface = PAIRS[name][0]
+        if name == "floor":
+            cmd = [str(echo), "--iface", iface]
+        else:
+            cmd = [p.format(iface=iface, slaves=args.slaves) for p in shlex.split(slave_cmd)]
+        return cmd + (["--busy-poll"] if busy else [])
+
     results = {}  # (mode, frame, target) -> [ns]
+    lost = {}
+    seconds = {}
     started = time.monotonic()
     tmp = Path(tempfile.mkdtemp(prefix="wire_bench_"))
     netns_up()
     try:
         for mode in modes:
             busy = mode == "busy-poll"
-            for rnd in range(args.rounds):
-                targets = [("floor", [str(echo), "--iface", SLAVE_IF]),
-                           ("slave", [p.format(iface=SLAVE_IF, slaves=args.slaves)
-                                      for p in shlex.split(slave_cmd)])]
-                if rnd % 2:
-                    targets.reverse()
-                for name, cmd in targets:
-                    if busy:
-                        cmd = cmd + ["--busy-poll"]
-                    with open(tmp / f"{name}.log", "a") as log:
-                        t = Target(cmd, log)
+            pinger = Pinger(pinger_path, args.slaves, busy and args.pinger_busy_poll, tmp)
+            mode_started = time.monotonic()
+
+            def collect(names, frame):
+                for name, (vals, n_lost) in pinger.run(names, frame, per_round).items():
+                    results.setdefault((mode, frame, name), []).extend(vals)
+                    lost[(mode, frame, name)] = lost.get((mode, frame, name), 0) + n_lost
+
+            if not busy:
+                # Both responders up at once; the pinger interleaves them frame by frame.
+                running = [Responder(n, command(n, False), tmp) for n in ("floor", "slave")]
+                try:
+                    pinger.wait_answering(["floor", "slave"])
+                    for _ in range(args.rounds):
+                        for frame in FRAMES:
+                            collect(["floor", "slave"], frame)
+                finally:
+                    for r in running:
+                        r.stop()
+            else:
+                for rnd in range(args.rounds):
+                    order = ["floor", "slave"] if rnd % 2 == 0 else ["slave", "floor"]
+                    for name in order:
+                        r = Responder(name, command(name, True), tmp)
                         try:
-                            wait_answering(pinger, args.slaves, busy, tmp)
-                            for frame in ("brd", "lrw"):
-                                f = tmp / "samples.txt"
-                                ping(pinger, frame, per_round, args.slaves, busy, f,
-                                     setup_fmmu=(frame == "lrw"))
-                                vals = [int(x) for x in f.read_text().split()]
-                                results.setdefault((mode, frame, name), []).extend(vals)
+                            pinger.wait_answering([name])
+                            for frame in FRAMES:
+                                collect([name], frame)
                         finally:
-                            rc = t.stop()
-                        if rc != 0:
-                            log.flush()
-                            raise RuntimeError(f"{name} exited with {rc}: "
-                                               f"{(tmp / f'{name}.log').read_text()[-2000:]}")
+                            r.stop()
+            seconds[mode] = time.monotonic() - mode_started
     finally:
         netns_down()
 
-    print(f"wire round trip over veth, {args.slaves} slave(s), "
-          f"{args.samples} samples per row, {args.rounds} alternating rounds, "
-          f"{time.monotonic() - started:.0f} s")
+    print(f"wire round trip over veth, {args.slaves} slave(s), {args.samples} samples per row "
+          f"({args.rounds} rounds), {time.monotonic() - started:.0f} s")
     print(f"{'mode':10s} {'frame':5s} {'target':6s} {'p50 us':>8s} {'p90 us':>8s} "
-          f"{'p99 us':>8s} {'p50 x':>6s} {'p99 x':>6s}  verdict")
+          f"{'p99 us':>8s} {'p50 x':>6s} {'p99 x':>6s} {'lost':>5s}  verdict")
     ok = True
     for mode in modes:
-        for frame in ("brd", "lrw"):
+        for frame in FRAMES:
             floor = results[(mode, frame, "floor")]
             f50, f99 = pct(floor, 50), pct(floor, 99)
             for name in ("floor", "slave"):
@@ -188,9 +228,9 @@ def main():
                     ok &= good
                     verdict = "ok (<= 1.3x)" if good else "OVER 1.3x"
                 print(f"{mode:10s} {frame.upper():5s} {name:6s} {p50:8.1f} {p90:8.1f} "
-                      f"{p99:8.1f} {r50:5.2f}x {r99:5.2f}x  {verdict}")
-    print(f"mean of all slave samples: "
-          f"{statistics.fmean(v for k, vs in results.items() if k[2] == 'slave' for v in vs) / 1000:.1f} us")
+                      f"{p99:8.1f} {r50:5.2f}x {r99:5.2f}x {lost[(mode, frame, name)]:5d}  "
+                      f"{verdict}")
+    print("wall time per mode: " + ", ".join(f"{m} {t:.0f} s" for m, t in seconds.items()))
     return 0 if ok else 1
 
 

@@ -2,12 +2,13 @@
 // a raw socket, one at a time, and measures each round trip until the reply (the same frame
 // with bit 0x02 of the first source-MAC byte set, ETG.1000.4 §5.1) comes back.
 //
-//   wire_pinger --iface IFACE --frame brd|lrw [--count N] [--slaves N] [--lrw-bytes B]
+//   wire_pinger --iface IFACE[,IFACE...] --frame brd|lrw [--count N] [--slaves N] [--lrw-bytes B]
 //               [--busy-poll] [--setup-fmmu] [--warmup N] [--samples-out FILE]
 //
 // --setup-fmmu first maps B bytes of logical space per slave onto each slave's process RAM
 // (FMMU0, read/write, APWR by position) so that LRW exercises the FMMU path of a real slave.
-// Prints one line of JSON: {"frame":..,"count":..,"lost":..,"p50_us":..,"p90_us":..,
+// Several interfaces are pinged in turn, frame by frame. Prints one line of JSON per interface:
+// {"frame":..,"count":..,"lost":..,"p50_us":..,"p90_us":..,
 // "p99_us":..,"min_us":..,"max_us":..,"wkc":..}; --samples-out also writes every round trip
 // (ns, one per line) so several runs can be pooled. Exit code 2 on setup errors.
 #include <arpa/inet.h>
@@ -129,6 +130,63 @@ double percentile(std::vector<int64_t>& v, double p) {
   return static_cast<double>(v[k]) / 1000.0;
 }
 
+bool open_socket(const std::string& iface, Socket& s) {
+  s.fd = socket(AF_PACKET, SOCK_RAW, 0);
+  if (s.fd < 0) {
+    std::fprintf(stderr, "wire_pinger: socket: %s\n", std::strerror(errno));
+    return false;
+  }
+  ifreq ifr{};
+  std::snprintf(ifr.ifr_name, sizeof(ifr.ifr_name), "%s", iface.c_str());
+  if (ioctl(s.fd, SIOCGIFINDEX, &ifr) < 0) {
+    std::fprintf(stderr, "wire_pinger: no such network interface: %s\n", iface.c_str());
+    return false;
+  }
+  const int ifindex = ifr.ifr_ifindex;
+  if (ioctl(s.fd, SIOCGIFHWADDR, &ifr) < 0) return false;
+  std::memcpy(s.mac, ifr.ifr_hwaddr.sa_data, 6);
+  int one = 1;
+  (void)setsockopt(s.fd, SOL_PACKET, PACKET_IGNORE_OUTGOING, &one, sizeof(one));
+  (void)setsockopt(s.fd, SOL_PACKET, PACKET_QDISC_BYPASS, &one, sizeof(one));
+  sockaddr_ll addr{};
+  addr.sll_family = AF_PACKET;
+  addr.sll_protocol = htons(kEtherTypeEcat);
+  addr.sll_ifindex = ifindex;
+  if (bind(s.fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) < 0) {
+    std::fprintf(stderr, "wire_pinger: bind: %s\n", std::strerror(errno));
+    return false;
+  }
+  return true;
+}
+
+// FMMU0 (0x0600, ETG.1000.4 Table 57) of every slave: logical start, length, start bit 0,
+// stop bit 7, physical 0x1000, physical start bit 0, type read+write (3), activate.
+bool map_fmmus(Socket& s, int slaves, int lrw_bytes) {
+  uint16_t wkc = 0;
+  for (int pos = 0; pos < slaves; ++pos) {
+    std::vector<uint8_t> fmmu(16, 0);
+    put32(fmmu.data(), static_cast<uint32_t>(pos * lrw_bytes));
+    put16(fmmu.data() + 4, static_cast<uint16_t>(lrw_bytes));
+    fmmu[6] = 0;
+    fmmu[7] = 7;
+    put16(fmmu.data() + 8, 0x1000);
+    fmmu[10] = 0;
+    fmmu[11] = 3;
+    fmmu[12] = 1;
+    Frame f = build_frame(s.mac, kCmdApwr, static_cast<uint16_t>(-pos), 0x0600, fmmu);
+    // Idempotent register write: retried, so one late reply on a busy machine is no error.
+    bool answered = false;
+    for (int attempt = 0; attempt < 20 && !answered; ++attempt) {
+      answered = round_trip(s, f, 0xF0, wkc) >= 0;
+    }
+    if (!answered) {
+      std::fprintf(stderr, "wire_pinger: no answer to FMMU setup of slave %d\n", pos);
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -172,95 +230,70 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "wire_pinger: bad arguments\n");
     return 2;
   }
-  Socket s;
-  s.busy = busy;
-  s.fd = socket(AF_PACKET, SOCK_RAW, 0);
-  if (s.fd < 0) {
-    std::fprintf(stderr, "wire_pinger: socket: %s\n", std::strerror(errno));
-    return 2;
+  // One socket per interface; several interfaces are pinged in turn, frame by frame, so
+  // that responders on them are measured under the same machine noise.
+  std::vector<std::string> ifaces;
+  for (size_t pos = 0; pos <= iface.size();) {
+    const size_t comma = std::min(iface.find(',', pos), iface.size());
+    ifaces.push_back(iface.substr(pos, comma - pos));
+    pos = comma + 1;
   }
-  ifreq ifr{};
-  std::snprintf(ifr.ifr_name, sizeof(ifr.ifr_name), "%s", iface.c_str());
-  if (ioctl(s.fd, SIOCGIFINDEX, &ifr) < 0) {
-    std::fprintf(stderr, "wire_pinger: no such network interface: %s\n", iface.c_str());
-    return 2;
+  struct Target {
+    Socket socket;
+    Frame frame;
+    std::vector<int64_t> samples;
+    int lost = 0;
+    uint16_t wkc = 0;
+  };
+  std::vector<Target> targets(ifaces.size());
+  for (size_t k = 0; k < ifaces.size(); ++k) {
+    Socket& s = targets[k].socket;
+    s.busy = busy;
+    if (!open_socket(ifaces[k], s)) return 2;
+    if (setup_fmmu && !map_fmmus(s, slaves, lrw_bytes)) return 1;
+    targets[k].frame =
+        kind == "brd"
+            ? build_frame(s.mac, kCmdBrd, 0, 0x0000, std::vector<uint8_t>(2, 0))
+            : build_frame(s.mac, kCmdLrw, 0, 0,
+                          std::vector<uint8_t>(static_cast<size_t>(lrw_bytes * slaves), 0x5A));
+    targets[k].samples.reserve(static_cast<size_t>(count));
   }
-  const int ifindex = ifr.ifr_ifindex;
-  if (ioctl(s.fd, SIOCGIFHWADDR, &ifr) < 0) return 2;
-  std::memcpy(s.mac, ifr.ifr_hwaddr.sa_data, 6);
-  int one = 1;
-  (void)setsockopt(s.fd, SOL_PACKET, PACKET_IGNORE_OUTGOING, &one, sizeof(one));
-  (void)setsockopt(s.fd, SOL_PACKET, PACKET_QDISC_BYPASS, &one, sizeof(one));
-  sockaddr_ll addr{};
-  addr.sll_family = AF_PACKET;
-  addr.sll_protocol = htons(kEtherTypeEcat);
-  addr.sll_ifindex = ifindex;
-  if (bind(s.fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) < 0) {
-    std::fprintf(stderr, "wire_pinger: bind: %s\n", std::strerror(errno));
-    return 2;
-  }
-
-  uint16_t wkc = 0;
-  if (setup_fmmu) {
-    // FMMU0 (0x0600, ETG.1000.4 Table 57): logical start, length, start bit 0, stop bit 7,
-    // physical 0x1000, physical start bit 0, type read+write (3), activate.
-    for (int pos = 0; pos < slaves; ++pos) {
-      std::vector<uint8_t> fmmu(16, 0);
-      put32(fmmu.data(), static_cast<uint32_t>(pos * lrw_bytes));
-      put16(fmmu.data() + 4, static_cast<uint16_t>(lrw_bytes));
-      fmmu[6] = 0;
-      fmmu[7] = 7;
-      put16(fmmu.data() + 8, 0x1000);
-      fmmu[10] = 0;
-      fmmu[11] = 3;
-      fmmu[12] = 1;
-      Frame f = build_frame(s.mac, kCmdApwr, static_cast<uint16_t>(-pos), 0x0600, fmmu);
-      // Idempotent register write: retried, so one late reply on a busy machine is no error.
-      bool answered = false;
-      for (int attempt = 0; attempt < 20 && !answered; ++attempt) {
-        answered = round_trip(s, f, 0xF0, wkc) >= 0;
-      }
-      if (!answered) {
-        std::fprintf(stderr, "wire_pinger: no answer to FMMU setup of slave %d\n", pos);
-        return 1;
-      }
-    }
-  }
-
-  Frame f = kind == "brd"
-                ? build_frame(s.mac, kCmdBrd, 0, 0x0000, std::vector<uint8_t>(2, 0))
-                : build_frame(s.mac, kCmdLrw, 0, 0,
-                              std::vector<uint8_t>(static_cast<size_t>(lrw_bytes * slaves), 0x5A));
-  std::vector<int64_t> samples;
-  samples.reserve(static_cast<size_t>(count));
-  int lost = 0;
   for (int i = 0; i < warmup + count; ++i) {
-    const int64_t rtt = round_trip(s, f, static_cast<uint8_t>(i & 0x7F), wkc);
-    if (i < warmup) continue;
-    if (rtt < 0) {
-      ++lost;
-      continue;
+    for (size_t j = 0; j < targets.size(); ++j) {
+      // Alternate the order too, so no target always goes first after the other.
+      Target& t = targets[(i % 2) ? targets.size() - 1 - j : j];
+      const int64_t rtt = round_trip(t.socket, t.frame, static_cast<uint8_t>(i & 0x7F), t.wkc);
+      if (i < warmup) continue;
+      if (rtt < 0) {
+        ++t.lost;
+        continue;
+      }
+      t.samples.push_back(rtt);
     }
-    samples.push_back(rtt);
   }
-  if (!samples_out.empty()) {
-    FILE* out = std::fopen(samples_out.c_str(), "w");
-    if (out == nullptr) {
-      std::fprintf(stderr, "wire_pinger: cannot write %s\n", samples_out.c_str());
-      return 2;
+  for (size_t k = 0; k < targets.size(); ++k) {
+    Target& t = targets[k];
+    if (!samples_out.empty()) {
+      const std::string path =
+          targets.size() == 1 ? samples_out : samples_out + "." + std::to_string(k);
+      FILE* out = std::fopen(path.c_str(), "w");
+      if (out == nullptr) {
+        std::fprintf(stderr, "wire_pinger: cannot write %s\n", path.c_str());
+        return 2;
+      }
+      for (const int64_t v : t.samples) std::fprintf(out, "%lld\n", static_cast<long long>(v));
+      std::fclose(out);
     }
-    for (const int64_t v : samples) std::fprintf(out, "%lld\n", static_cast<long long>(v));
-    std::fclose(out);
+    std::vector<int64_t> sorted = t.samples;
+    std::sort(sorted.begin(), sorted.end());
+    const double mn = sorted.empty() ? 0 : static_cast<double>(sorted.front()) / 1000.0;
+    const double mx = sorted.empty() ? 0 : static_cast<double>(sorted.back()) / 1000.0;
+    std::printf(
+        "{\"iface\":\"%s\",\"frame\":\"%s\",\"count\":%zu,\"lost\":%d,\"p50_us\":%.2f,"
+        "\"p90_us\":%.2f,\"p99_us\":%.2f,\"min_us\":%.2f,\"max_us\":%.2f,\"wkc\":%u}\n",
+        ifaces[k].c_str(), kind.c_str(), sorted.size(), t.lost, percentile(sorted, 50),
+        percentile(sorted, 90), percentile(sorted, 99), mn, mx, t.wkc);
+    close(t.socket.fd);
   }
-  std::vector<int64_t> sorted = samples;
-  std::sort(sorted.begin(), sorted.end());
-  const double mn = sorted.empty() ? 0 : static_cast<double>(sorted.front()) / 1000.0;
-  const double mx = sorted.empty() ? 0 : static_cast<double>(sorted.back()) / 1000.0;
-  std::printf(
-      "{\"frame\":\"%s\",\"count\":%zu,\"lost\":%d,\"p50_us\":%.2f,\"p90_us\":%.2f,"
-      "\"p99_us\":%.2f,\"min_us\":%.2f,\"max_us\":%.2f,\"wkc\":%u}\n",
-      kind.c_str(), samples.size(), lost, percentile(sorted, 50), percentile(sorted, 90),
-      percentile(sorted, 99), mn, mx, wkc);
-  close(s.fd);
   return 0;
 }
