@@ -124,9 +124,9 @@ void print_text(coe::ObjectDictionary& od) {
     for (const auto& e : o.entries()) {
       const std::string name = o.code() == coe::ObjectCode::Var ? o.name() : e.name;
       std::printf("0x%04X %-4s %-44s %-18s %5u %-11s %-5s %s\n", o.index(),
-                  fmt::format("{:02X}", e.subindex).c_str(), name.c_str(),
-                  type_name(od, e).c_str(), e.bit_length, access_text(e.access).c_str(),
-                  pdo_text(e.access).c_str(), value_text(od, o, e).c_str());
+                  fmt::format("{:02X}", e.subindex).c_str(), name.c_str(), type_name(od, e).c_str(),
+                  e.bit_length, access_text(e.access).c_str(), pdo_text(e.access).c_str(),
+                  value_text(od, o, e).c_str());
     }
   });
 }
@@ -190,8 +190,7 @@ void add_od(CLI::App& app) {
   auto opt = std::make_shared<OdOptions>();
   auto* cmd = app.add_subcommand("od", "Print the object dictionary of the rack");
   cmd->add_option("--config", opt->config, "Rack file (YAML); default: the built-in rack");
-  cmd->add_option("--format", opt->format, "Output format")
-      ->check(CLI::IsMember({"text", "json"}));
+  cmd->add_option("--format", opt->format, "Output format")->check(CLI::IsMember({"text", "json"}));
   cmd->add_option("--state-dir", opt->state_dir,
                   "Directory of the stored parameters (default $XDG_STATE_HOME/rackcat)");
   cmd->callback([opt] { run_od(*opt); });

@@ -17,13 +17,17 @@ struct ExitRequest {
   int code;
 };
 
-CommandRegistrar::CommandRegistrar(const char* name, RegisterFn fn) { registry()[name] = fn; }
+CommandRegistrar::CommandRegistrar(const char* name, RegisterFn fn) {
+  registry()[name] = fn;
+}
 
 void register_all(CLI::App& app) {
   for (const auto& [name, fn] : registry()) fn(app);
 }
 
-void exit_with(int code) { throw ExitRequest{code}; }
+void exit_with(int code) {
+  throw ExitRequest{code};
+}
 
 }  // namespace rackcat::apps
 

@@ -179,6 +179,7 @@ class Esc {
   void esm_enter(AlState to);
   void esm_error(AlState stay_or_fall_to, uint16_t code);
   void esm_write_status();
+  void esm_sm_changed();
   // watchdog.cpp
   uint64_t watchdog_period_ns() const;
   void watchdog_trigger(uint64_t now_ns);
@@ -203,6 +204,7 @@ class Esc {
   // ESM
   AlState state_ = AlState::Init;
   bool al_control_pending_ = false;
+  uint8_t sm_changed_ = 0;  // SMs 0-3 reconfigured by the master since the last frame end
   bool dc_synchronised_ = false;  // SYNC0 was running when SAFEOP was entered
 
   // Mailbox (SM0 receive, SM1 send by ETG convention, validated by the ESM).

@@ -188,6 +188,23 @@ uint16_t Esc::esm_check_dc() const {
   return 0;
 }
 
+void Esc::esm_sm_changed() {
+  // ETG.1000.6 §5.3: the SyncManager settings checked on the way up must stay valid. A master
+  // that disables or moves SM2/SM3 in SAFEOP/OP sends the slave back to PREOP with 0x001D /
+  // 0x001E; SM0/SM1 changed in PREOP or above send it to INIT with 0x0016.
+  const uint8_t changed = sm_changed_;
+  sm_changed_ = 0;
+  const bool mailbox_state = state_ == AlState::PreOp || state_ == AlState::SafeOp || state_ == AlState::Op;
+  if ((changed & 0x03) && mailbox_state && esm_check_mailbox(false) != 0) {
+    esm_error(AlState::Init, al_code::kInvalidMailboxConfig);
+    return;
+  }
+  if ((changed & 0x0C) && (state_ == AlState::SafeOp || state_ == AlState::Op)) {
+    const uint16_t code = esm_check_process_data();
+    if (code != 0) esm_error(AlState::PreOp, code);
+  }
+}
+
 void Esc::esm_enter(AlState to) {
   const AlState from = state_;
   if (to == AlState::Init) {
@@ -221,6 +238,12 @@ void Esc::esm_enter(AlState to) {
   }
   esm_write_status();
   app_.on_state_changed(from, to);
+}
+
+void Esc::application_error(AlState fall_to, uint16_t code) {
+  const AlState target =
+      static_cast<uint8_t>(fall_to) < static_cast<uint8_t>(state_) ? fall_to : state_;
+  esm_error(target, code);
 }
 
 void Esc::esm_error(AlState stay_or_fall_to, uint16_t code) {

@@ -31,6 +31,7 @@ def go(master, state, timeout_us=2_000_000):
     master.state = state
     master.write_state()
     reached = master.state_check(state, timeout_us)
+    master.read_state()
     names = ", ".join(
         f"{s.name}: {state_name(s.state)}" + (f" (AL 0x{s.al_status:04X})" if s.al_status else "")
         for s in master.slaves[:4]
@@ -91,6 +92,7 @@ def main():
                   f"revision 0x{s.rev:08X}, state {state_name(s.state)}")
         slave = master.slaves[0]
         print("state transitions:")
+        master.read_state()
         print(f"  -> PREOP  (config_init)  [{slave.name}: {state_name(slave.state)}]")
         print("SDO reads (PREOP):")
         print(f"  0x1008 device name      : {sdo_str(slave, 0x1008, 0)}")

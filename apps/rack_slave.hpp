@@ -1,0 +1,47 @@
+// One emulated rack behind one emulated ESC: adapts the Fusion.IO-style device (mdp::Device,
+// with its slot-card drivers, modules::Rack) to the ESC's application interface
+// (ecat::Application). This is the only place where the ESC side and the device side meet;
+// neither knows the other.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "ecat/application.hpp"
+#include "mdp/device.hpp"
+#include "mdp/rack_config.hpp"
+#include "modules/rack.hpp"
+
+namespace rackcat::apps {
+
+class RackSlave final : public ecat::Application {
+ public:
+  // `position` (0-based) distinguishes the slaves of a segment: it is added to the serial
+  // number (0x1018:04, SII word 0x0E) and names the slave's own state directory.
+  RackSlave(mdp::RackConfig config, const std::string& state_dir, int position);
+  ~RackSlave() override;
+
+  mdp::Device& device() { return *device_; }
+  modules::Rack& rack() { return *rack_; }
+
+  std::span<const uint8_t> eeprom() const override { return sii_; }
+  uint16_t on_state_request(ecat::AlState from, ecat::AlState to) override;
+  void on_state_changed(ecat::AlState from, ecat::AlState to) override;
+  ecat::ProcessDataSizes process_data_sizes() const override;
+  size_t on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) override;
+  size_t poll_mailbox(std::span<uint8_t> reply) override;
+  void update_inputs(std::span<uint8_t> inputs) override;
+  void on_outputs(std::span<const uint8_t> outputs) override;
+  void on_sync(int which, uint64_t system_time_ns) override;
+  void on_watchdog_expired() override;
+
+ private:
+  std::unique_ptr<mdp::Device> device_;
+  std::unique_ptr<modules::Rack> rack_;  // the slot cards; a CycleListener of device_
+  std::vector<uint8_t> sii_;
+};
+
+}  // namespace rackcat::apps
