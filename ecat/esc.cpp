@@ -55,6 +55,7 @@ void Esc::power_on_reset() {
   const AlState previous = state_;
   state_ = AlState::Init;
   al_control_pending_ = false;
+  sm_changed_ = 0;
   dc_synchronised_ = false;
   mailbox_work_ = false;
   repeat_pending_ = false;
@@ -236,6 +237,7 @@ bool Esc::physical_write(uint16_t address, const uint8_t* src, uint16_t len) {
 
 void Esc::end_frame() {
   if (al_control_pending_) esm_control_written();
+  if (sm_changed_ != 0) esm_sm_changed();
   if (mailbox_work_ || repeat_pending_) {
     mailbox_service();
   } else if (state_ != AlState::Init && sm_[1].active &&

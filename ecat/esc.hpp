@@ -204,7 +204,7 @@ class Esc {
   // ESM
   AlState state_ = AlState::Init;
   bool al_control_pending_ = false;
-  uint8_t sm_changed_ = 0;  // SMs 0-3 reconfigured by the master since the last frame end
+  uint8_t sm_changed_ = 0;        // SMs 0-3 reconfigured by the master since the last frame end
   bool dc_synchronised_ = false;  // SYNC0 was running when SAFEOP was entered
 
   // Mailbox (SM0 receive, SM1 send by ETG convention, validated by the ESM).

@@ -194,7 +194,8 @@ void Esc::esm_sm_changed() {
   // 0x001E; SM0/SM1 changed in PREOP or above send it to INIT with 0x0016.
   const uint8_t changed = sm_changed_;
   sm_changed_ = 0;
-  const bool mailbox_state = state_ == AlState::PreOp || state_ == AlState::SafeOp || state_ == AlState::Op;
+  const bool mailbox_state =
+      state_ == AlState::PreOp || state_ == AlState::SafeOp || state_ == AlState::Op;
   if ((changed & 0x03) && mailbox_state && esm_check_mailbox(false) != 0) {
     esm_error(AlState::Init, al_code::kInvalidMailboxConfig);
     return;

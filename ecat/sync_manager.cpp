@@ -43,13 +43,16 @@ void Esc::reload_sm(int n) {
   const uint16_t base = sm_base(n);
   SmState& s = sm_[n];
   const bool was_enabled = s.enabled;
+  const SmState before = s;
   const bool was_active = s.active;
   const bool old_repeat = s.repeat_request;
   s.start = le::get16(&mem_[base]);
   s.length = le::get16(&mem_[base + 2]);
   s.control = mem_[base + reg::kSmControlOffset];
   const uint8_t activate = mem_[base + reg::kSmActivateOffset];
-  s.enabled = (activate & 0x01) && s.length != 0;
+  // A buffer running past the end of the address space does not work as a SyncManager.
+  s.enabled = (activate & 0x01) && s.length != 0 &&
+              static_cast<uint32_t>(s.start) + s.length <= reg::kAddressSpace;
   s.active = s.enabled && (mem_[base + reg::kSmPdiControlOffset] & 0x01) == 0;
   s.repeat_request = (activate & 0x02) != 0;
   if (s.enabled) {
@@ -69,6 +72,11 @@ void Esc::reload_sm(int n) {
     repeat_pending_ = true;  // the master lost a reply and asks for it again
   }
   update_ecat_event(n);
+  // The master reconfigured a mailbox or process-data SM under a running state: the µC
+  // checks it after the frame (esm_sm_changed).
+  const bool config_changed = before.enabled != s.enabled || before.start != s.start ||
+                              before.length != s.length || before.control != s.control;
+  if (config_changed && n < 4) sm_changed_ |= static_cast<uint8_t>(1u << n);
 }
 
 void Esc::set_sm_pdi_deactivated(int n, bool deactivated) {

@@ -266,3 +266,47 @@ TEST(AlStatusCodeNames, TableLookup) {
 
 }  // namespace
 }  // namespace rackcat::ecat::test
+
+namespace rackcat::ecat::test {
+namespace {
+
+TEST_F(EsmTest, DisablingOutputsSmInOpFallsToPreop) {
+  line.to_op();
+  line.master->fpwr8(kStation, 0x0816, 0x00);  // master switches SM2 off
+  EXPECT_EQ(status(), 0x0012);
+  EXPECT_EQ(code(), 0x001D);
+  EXPECT_EQ(line.app(0).transitions.back(), std::make_pair(AlState::Op, AlState::PreOp));
+}
+
+TEST_F(EsmTest, MovingMailboxSmInPreopFallsToInit) {
+  line.to_preop();
+  line.master->fpwr8(kStation, 0x0806, 0x00);
+  EXPECT_EQ(status(), 0x0011);
+  EXPECT_EQ(code(), 0x0016);
+}
+
+TEST_F(EsmTest, InitRequestTogetherWithSmResetIsClean) {
+  line.to_op();
+  // ethercrab/SOEM style reset: INIT + ack and the SM clear in one frame.
+  FrameBuilder b;
+  b.add(Command::Bwr, 0, 0x0120, {0x11});
+  b.add(Command::Bwr, 0, 0x0800, std::vector<uint8_t>(32, 0));
+  line.master->send_frame(b);
+  EXPECT_EQ(status(), 0x0001);
+  EXPECT_EQ(code(), 0x0000);
+}
+
+TEST(Esm, SyncManagerPastTheAddressSpaceIsNotASyncManager) {
+  Line line(1);
+  line.to_op();
+  // Disable SM3, move it to the top of memory with a length past 0xFFFF, enable again: the ESC
+  // does not treat it as a SyncManager (no buffer semantics, no device call past memory).
+  line.master->fpwr8(0x1001, 0x081E, 0x00);
+  line.master->fpwr(0x1001, 0x0818, {0xF0, 0xFF, 0x00, 0x01, 0x20, 0x00, 0x01, 0x00});
+  EXPECT_EQ(line.esc(0).al_state(), AlState::PreOp);
+  EXPECT_EQ(line.esc(0).al_status_code(), 0x001E);
+  EXPECT_EQ(line.master->fprd(0x1001, 0xFFF0, 16).wkc, 1);
+}
+
+}  // namespace
+}  // namespace rackcat::ecat::test
