@@ -91,6 +91,7 @@ void UartDriver::read_config() {
     ch.baud_rate = ch.config.baud_rate();
     ch.bits_per_char = ch.config.bits_per_char();
     ch.rts_cts = ch.config.flow == 2;
+    ch.data_mask = static_cast<uint8_t>(0xFFu >> (3 - std::min<unsigned>(ch.config.data_bits, 3)));
     apply_termios(c);
   }
 }
@@ -331,6 +332,10 @@ void UartDriver::line_thread() {
           uint8_t buf[64];
           const ssize_t got = ::read(ch.master_fd, buf, std::min(budget, sizeof buf));
           if (got > 0) {
+            // Linux ptys are always 8-bit clean (pty_set_termios forces CS8, no parity), so
+            // narrower character sizes are applied here: the upper bits never cross the line.
+            const uint8_t mask = ch.data_mask.load();
+            for (ssize_t i = 0; i < got; ++i) buf[i] &= mask;
             buckets[c].rx -= static_cast<double>(got);
             std::lock_guard lock(ch.rx_producers);
             if (ch.rx.push(buf, static_cast<size_t>(got)) < static_cast<size_t>(got))
@@ -344,6 +349,8 @@ void UartDriver::line_thread() {
       if (!blocked && budget > 0 && ch.tx.size() > 0) {
         uint8_t buf[64];
         const size_t k = ch.tx.peek(buf, std::min(budget, sizeof buf));
+        const uint8_t mask = ch.data_mask.load();
+        for (size_t i = 0; i < k; ++i) buf[i] &= mask;
         const ssize_t put = ::write(ch.master_fd, buf, k);
         if (put > 0) {
           ch.tx.pop(buf, static_cast<size_t>(put));

@@ -18,9 +18,12 @@
 //           4096), 15 CTS.
 //
 // Line side: each channel is a Linux pseudo-terminal (posix_openpt) in raw mode whose slave
-// path (/dev/pts/N) a serial program opens. A line thread moves bytes between the terminal and
-// the card's FIFOs at the configured baud rate (10-12 bit times per character); bytes arriving
-// while the Rx FIFO is full are lost and set the Rx overflow bit, as on the real card.
+// path (/dev/pts/N) a serial program opens. Baud rate, stop bits and flow control are set on
+// the terminal with termios; Linux ptys force 8-bit characters without parity, so narrower
+// data bits are applied by masking each character on the line. A line thread moves bytes between
+// the terminal and the card's FIFOs at the configured baud rate (10-12 bit times per character);
+// bytes arriving while the Rx FIFO is full are lost and set the Rx overflow bit, as on the real
+// card.
 #pragma once
 
 #include <array>
@@ -77,6 +80,7 @@ class UartDriver final : public CardDriver {
     std::atomic<uint32_t> baud_rate{9600};
     std::atomic<unsigned> bits_per_char{10};
     std::atomic<bool> rts_cts{false};
+    std::atomic<uint8_t> data_mask{0xFF};  // 5..8 data bits
     UartConfig config;
     int master_fd = -1;
     int slave_fd = -1;  // kept open so the terminal exists while no program has it open
