@@ -13,12 +13,12 @@
 #include <ctime>
 
 #include "coe/bits.hpp"
+#include "coe/process_image.hpp"
 #include "coe/sdo_server.hpp"
 #include "mdp/command_bytes.hpp"
 #include "mdp/object_dictionary_builder.hpp"
 #include "mdp/parameter_set.hpp"
 #include "mdp/parameter_store.hpp"
-#include "mdp/process_image.hpp"
 
 namespace rackcat::mdp {
 
@@ -66,8 +66,7 @@ struct Device::Impl {
   RackConfig config;
   coe::ObjectDictionary od;
   std::unique_ptr<coe::SdoServer> sdo;
-  std::unique_ptr<ProcessImage> outputs;
-  std::unique_ptr<ProcessImage> inputs;
+  std::unique_ptr<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
   std::unique_ptr<ParameterSet> params;
   std::unique_ptr<ParameterStore> store;
   std::vector<uint8_t> default_payload;  // the parameter set as shipped (factory defaults)
@@ -121,8 +120,7 @@ struct Device::Impl {
     od.for_each([](Object& o) { o.load_defaults(); });
     clock_offset_s = 0;
     load_stored();
-    outputs->compile();
-    inputs->compile();
+    image->compile();
   }
 
   void clear_latched() {
@@ -208,11 +206,9 @@ void Device::Impl::install_hooks() {
       if (is_valid_clock(text)) clock_offset_s = parse_clock(text) - std::time(nullptr);
     };
   }
-  // 0x1C12/0x1C13: a new assignment recompiles the process image (capacity reserved).
+  // 0x1C12/0x1C13: a new assignment recompiles the process image (mailbox path, PREOP only).
   for (uint16_t index : {uint16_t{0x1C12}, uint16_t{0x1C13}}) {
-    od.find(index)->hooks.after_write = [this, index](Object&, int) {
-      (index == 0x1C12 ? outputs : inputs)->compile();
-    };
+    od.find(index)->hooks.after_write = [this, index](Object&, int) { image->compile(); };
   }
   // 0x1C32/0x1C33: counters from the cyclic path; Get Cycle Time = 2 resets them.
   for (int dir = 0; dir < 2; ++dir) {
@@ -330,8 +326,7 @@ void Device::Impl::install_hooks() {
       },
       [this](Object& obj) {
         params->apply(pending.payload);
-        outputs->compile();
-        inputs->compile();
+        image->compile();
         finish_command(obj, cmd::kLoadCapabilities);
         notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
       });
@@ -347,16 +342,14 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.default_payload = d.params->capture();
   d.state_dir = options.state_dir.empty() ? default_state_dir() : options.state_dir;
   d.store = std::make_unique<ParameterStore>(d.state_dir + "/parameters.bin");
-  d.outputs = std::make_unique<ProcessImage>(d.od, 0x1C12);
-  d.inputs = std::make_unique<ProcessImage>(d.od, 0x1C13);
+  d.image = std::make_unique<coe::ProcessImage>(d.od);
   d.install_hooks();
   if (options.load_stored_parameters) {
     d.load_stored();
-    d.outputs->compile();
-    d.inputs->compile();
   } else {
     d.load_report = "stored parameters not loaded";
   }
+  d.image->compile();
   d.sdo = std::make_unique<coe::SdoServer>(d.od);
 }
 
@@ -403,10 +396,7 @@ void Device::state_changed(EsmState from, EsmState to) {
   Impl& d = *impl_;
   d.state = to;
   if (to == EsmState::Init) d.sdo->reset();
-  if (to == EsmState::SafeOp && from == EsmState::PreOp) {
-    d.outputs->compile();
-    d.inputs->compile();
-  }
+  if (to == EsmState::SafeOp && from == EsmState::PreOp) d.image->compile();
   d.notify([&](CycleListener& l) { l.on_state_changed(*this, from, to); });
 }
 
@@ -415,15 +405,15 @@ EsmState Device::state() const {
 }
 
 uint16_t Device::output_bytes() const {
-  return impl_->outputs->bytes();
+  return static_cast<uint16_t>(impl_->image->output_bytes());
 }
 uint16_t Device::input_bytes() const {
-  return impl_->inputs->bytes();
+  return static_cast<uint16_t>(impl_->image->input_bytes());
 }
 
 void Device::write_outputs(std::span<const uint8_t> sm2) {
   Impl& d = *impl_;
-  d.outputs->to_objects(sm2);
+  d.image->write_outputs(sm2);
   d.notify([&](CycleListener& l) { l.on_outputs(*this); });
 }
 
@@ -438,7 +428,7 @@ void Device::read_inputs(std::span<uint8_t> sm3) {
   if (Object* esc = d.od.find(0xF6F2)) {
     for (uint8_t s = 1; s <= esc->sub0(); ++s) esc->set_u(s, d.last_sync_ns);
   }
-  d.inputs->from_objects(sm3);
+  d.image->read_inputs(sm3);
 }
 
 void Device::sync_event(int which, uint64_t system_time_ns) {

@@ -9,9 +9,7 @@
 #pragma once
 
 #include <cstdint>
-#include <span>
 
-#include "coe/abort_code.hpp"
 #include "coe/object_dictionary.hpp"
 #include "mdp/rack_config.hpp"
 
@@ -40,14 +38,10 @@ inline constexpr uint16_t kSyncWithSm2 = 0x22;  // 0x1C33 only: inputs latched o
 inline constexpr uint16_t kSyncTypesSupported =
     0x0007;  // free run | SM | DC SYNC0 (bits 4..2 = 001)
 
-// Bits a PDO mapping object maps (sum of its entries' lengths, subindex 1..sub0); 0 if the
-// object does not exist.
-uint32_t pdo_bits(const coe::ObjectDictionary& od, uint16_t pdo_index);
-// Checks a PDO assignment list for 0x1C12 (rx = true) or 0x1C13: every entry an existing
-// mapping object of the direction (else 0x06090030), no duplicates (0x06040043), total size
-// within the SM maximum (0x06040042).
-coe::AbortCode check_pdo_assignment(const coe::ObjectDictionary& od, bool rx,
-                                    std::span<const uint16_t> pdos);
+// 0x1C12/0x1C13 use coe's PDO assignment validator (coe/pdo_mapping.hpp: subindex 0 must be 0
+// while entries change (0x06010003), an index outside the direction's mapping range 0x06040043,
+// a missing mapping object 0x06020000, more than the SM maximum 0x06040042) plus one rule of
+// their own: the same PDO assigned twice is 0x06040043.
 
 // The module ident lists: 0xF050 (detected) and 0xF030 (configured) as they stand; true when
 // 0xF030 is in use (subindex 0 != 0) and differs from 0xF050 (ETG.5001.1: AL status 0x0070).

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "coe/bits.hpp"
+#include "coe/pdo_mapping.hpp"
 #include "mdp/card_catalogue.hpp"
 #include "mdp/object_dictionary_builder.hpp"
 #include "mdp/od_helpers.hpp"
@@ -39,7 +40,8 @@ Object mapping_object(const Module& m, const IoLayout& layout) {
   return o;
 }
 
-// The candidate assignment list after a write to 0x1C12/0x1C13, without allocating.
+// The assignment list in use after a write to 0x1C12/0x1C13 (single entry or complete
+// access), without allocating.
 struct Assignment {
   std::array<uint16_t, kMaxAssignEntries> pdo{};
   uint8_t count = 0;
@@ -66,11 +68,6 @@ Assignment candidate(const Object& obj, int subindex, std::span<const uint8_t> d
   return a;
 }
 
-bool is_mapping_object(const coe::ObjectDictionary& od, bool rx, uint16_t index) {
-  const uint16_t lo = rx ? 0x1600 : 0x1A00;
-  return index >= lo && index < lo + 0x200 && od.find(index) != nullptr;
-}
-
 Object assignment_object(const RackConfig& cfg, coe::ObjectDictionary& od, bool rx) {
   Object o(rx ? 0x1C12 : 0x1C13, ObjectCode::Array, rx ? "RxPDO assign" : "TxPDO assign",
            static_cast<uint16_t>(DataType::Unsigned16));
@@ -94,16 +91,18 @@ Object assignment_object(const RackConfig& cfg, coe::ObjectDictionary& od, bool 
               DataType::Unsigned16, acc("ro,wr_preop"), def));
   }
   o.finalize();
-  const coe::ObjectDictionary* dict = &od;
-  o.hooks.validate_write = [dict, rx](const Object& obj, int subindex,
-                                      std::span<const uint8_t> data, coe::EsmState) {
-    // A single entry must name a mapping object of this direction (or 0 to clear it).
-    if (subindex > 0 && data.size() >= 2) {
-      const uint16_t v = coe::get_le16(data.data());
-      if (v != 0 && !is_mapping_object(*dict, rx, v)) return AbortCode::ValueRange;
-    }
+  auto checks = coe::pdo_assign_validator(od, rx ? coe::PdoDirection::Rx : coe::PdoDirection::Tx,
+                                          sm::kMaxProcessDataBytes);
+  o.hooks.validate_write = [checks](const Object& obj, int subindex, std::span<const uint8_t> data,
+                                    coe::EsmState state) {
+    if (AbortCode rc = checks(obj, subindex, data, state); rc != AbortCode::None) return rc;
     const Assignment a = candidate(obj, subindex, data);
-    return check_pdo_assignment(*dict, rx, std::span<const uint16_t>(a.pdo.data(), a.count));
+    for (uint8_t i = 0; i < a.count; ++i) {
+      for (uint8_t j = 0; j < i; ++j) {
+        if (a.pdo[i] == a.pdo[j]) return AbortCode::ParameterIncompatible;
+      }
+    }
+    return AbortCode::None;
   };
   return o;
 }
@@ -143,28 +142,6 @@ Object sync_parameter_object(bool outputs) {
 }
 
 }  // namespace
-
-uint32_t pdo_bits(const coe::ObjectDictionary& od, uint16_t pdo_index) {
-  const Object* o = od.find(pdo_index);
-  if (!o) return 0;
-  uint32_t bits = 0;
-  for (uint8_t s = 1; s <= o->sub0(); ++s) bits += static_cast<uint32_t>(o->get_u(s) & 0xFF);
-  return bits;
-}
-
-coe::AbortCode check_pdo_assignment(const coe::ObjectDictionary& od, bool rx,
-                                    std::span<const uint16_t> pdos) {
-  uint64_t bits = 0;
-  for (size_t i = 0; i < pdos.size(); ++i) {
-    if (!is_mapping_object(od, rx, pdos[i])) return AbortCode::ValueRange;
-    for (size_t j = 0; j < i; ++j) {
-      if (pdos[j] == pdos[i]) return AbortCode::ParameterIncompatible;
-    }
-    bits += pdo_bits(od, pdos[i]);
-  }
-  if ((bits + 7) / 8 > sm::kMaxProcessDataBytes) return AbortCode::PdoLengthExceeded;
-  return AbortCode::None;
-}
 
 void add_communication_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
   const ControlModule& cm = cfg.control;

@@ -23,6 +23,7 @@ constexpr uint32_t kPdoLength = 0x06040042;
 constexpr uint32_t kIncompatible = 0x06040043;
 constexpr uint32_t kModuleList = 0x06090033;
 constexpr uint32_t kNoObject = 0x06020000;
+constexpr uint32_t kSubZero = 0x06010003;
 
 class SdoBehaviour : public ::testing::Test {
  protected:
@@ -125,13 +126,15 @@ TEST_F(SdoBehaviour, PdoAssignmentIsValidatedAndResizesTheProcessImage) {
   const uint16_t before = device->output_bytes();
   EXPECT_EQ(sdo->write_u(0x1C12, 0, 0, 1), 0u);
   EXPECT_EQ(device->output_bytes(), 0);
-  EXPECT_EQ(sdo->write_u(0x1C12, 1, 0x1234, 2), kValueRange);  // not a mapping object
-  EXPECT_EQ(sdo->write_u(0x1C12, 1, 0x1A01, 2), kValueRange);  // a TxPDO
+  EXPECT_EQ(sdo->write_u(0x1C12, 1, 0x1234, 2), kIncompatible);  // not a mapping index
+  EXPECT_EQ(sdo->write_u(0x1C12, 1, 0x1A01, 2), kIncompatible);  // a TxPDO
+  EXPECT_EQ(sdo->write_u(0x1C12, 1, 0x1601, 2), kNoObject);      // module 2 has no outputs
   EXPECT_EQ(sdo->write_u(0x1C12, 1, 0x1600, 2), 0u);
   EXPECT_EQ(sdo->write_u(0x1C12, 2, 0x1600, 2), 0u);
   EXPECT_EQ(sdo->write_u(0x1C12, 0, 2, 1), kIncompatible);  // the same PDO twice
   EXPECT_EQ(sdo->write_u(0x1C12, 0, 1, 1), 0u);
-  EXPECT_EQ(device->output_bytes(), 2);  // DOUTx16
+  EXPECT_EQ(sdo->write_u(0x1C12, 1, 0x1600, 2), kSubZero);  // entries change only at 0
+  EXPECT_EQ(device->output_bytes(), 2);                     // DOUTx16
   EXPECT_LT(device->output_bytes(), before);
   go(EsmState::SafeOp);
   EXPECT_EQ(sdo->write_u(0x1C12, 0, 0, 1), kDeviceState);
@@ -148,9 +151,13 @@ TEST_F(SdoBehaviour, PdoAssignmentBeyondTheSyncManagerMaximumIsRefused) {
   make(parse_rack_config(text, "big.yaml"));
   EXPECT_EQ(device->dictionary().find(0x1C13)->sub0(), 64);  // as many as fit 16384 bytes
   EXPECT_EQ(device->input_bytes(), sm::kMaxProcessDataBytes);
-  EXPECT_EQ(sdo->write_u(0x1C13, 65, sm::tx_pdo_index(65), 2), 0u);  // staged beyond subindex 0
+  EXPECT_EQ(sdo->write_u(0x1C13, 0, 0, 1), 0u);
+  for (uint16_t n = 1; n <= 65; ++n) {
+    ASSERT_EQ(sdo->write_u(0x1C13, static_cast<uint8_t>(n), sm::tx_pdo_index(n), 2), 0u);
+  }
   EXPECT_EQ(sdo->write_u(0x1C13, 0, 65, 1), kPdoLength);
-  EXPECT_EQ(device->dictionary().find(0x1C13)->sub0(), 64);
+  EXPECT_EQ(sdo->write_u(0x1C13, 0, 64, 1), 0u);
+  EXPECT_EQ(device->input_bytes(), sm::kMaxProcessDataBytes);
 }
 
 TEST_F(SdoBehaviour, SyncManagerParametersAcceptTheSupportedSyncTypes) {
