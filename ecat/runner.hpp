@@ -3,7 +3,11 @@
 // through Segment::process and fires the segment's SYNC/watchdog deadlines on time, until
 // SIGINT or SIGTERM.
 //
-//   Runner runner({.interface_name = "eth1", .wait = WaitMode::BusyPoll, .pcap_path = "x.pcap"});
+//   RunnerOptions options;                             // (designated initializers must name
+//   options.interface_name = "eth1";                   //  every field under -Wextra)
+//   options.wait = WaitMode::BusyPoll;
+//   options.pcap_path = "x.pcap";
+//   Runner runner(options);
 //   if (int rc = runner.open("rackcat")) return rc;   // one-line error already printed
 //   runner.loop().post(...);                           // e.g. from a control thread
 //   return runner.run(segment);                        // 0 after SIGINT/SIGTERM
