@@ -55,6 +55,15 @@ TEST(RackConfig, ExampleFileIsTheBuiltInDefault) {
   EXPECT_EQ(ss.str(), default_rack_yaml());
 }
 
+TEST(RackConfig, ExampleRacksParse) {
+  const std::string dir = std::string(RACKCAT_SOURCE_DIR) + "/examples/";
+  EXPECT_EQ(load_rack_config(dir + "tiny-rack.yaml").modules.size(), 2u);
+  const RackConfig big = load_rack_config(dir + "rack-120.yaml");
+  EXPECT_EQ(big.modules.size(), 120u);
+  EXPECT_EQ(big.modules.back().rim, 5);
+  EXPECT_EQ(big.modules.back().slot, 24);
+}
+
 TEST(RackConfig, LoopbackWiresDigitalOutputsToDigitalInputs) {
   const RackConfig cfg = default_rack();
   const Module* din = cfg.module_at(1, 2);
