@@ -242,9 +242,13 @@ void Esc::esm_enter(AlState to) {
 }
 
 void Esc::application_error(AlState fall_to, uint16_t code) {
-  const AlState target =
-      static_cast<uint8_t>(fall_to) < static_cast<uint8_t>(state_) ? fall_to : state_;
-  esm_error(target, code);
+  // Only a step down the table is taken (OP -> SAFEOP/PREOP/INIT, BOOT -> INIT, ...); anything
+  // else (a "fall" to BOOT, to the same or a higher state) keeps the state and sets the error.
+  constexpr int kRank[5] = {0, 1, 1, 2, 3};  // INIT, PREOP, BOOT, SAFEOP, OP
+  const int from = index_of(state_);
+  const int to = index_of(fall_to);
+  const bool step_down = kRank[to] < kRank[from] && kTransitions[from][to] == Check::None;
+  esm_error(step_down ? fall_to : state_, code);
 }
 
 void Esc::esm_error(AlState stay_or_fall_to, uint16_t code) {

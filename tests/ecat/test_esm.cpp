@@ -310,3 +310,27 @@ TEST(Esm, SyncManagerPastTheAddressSpaceIsNotASyncManager) {
 
 }  // namespace
 }  // namespace rackcat::ecat::test
+
+namespace rackcat::ecat::test {
+namespace {
+
+TEST(Esm, ApplicationErrorFallsOnlyDown) {
+  Line line(1);
+  line.to_op();
+  line.esc(0).application_error(AlState::SafeOp, 0x0070);
+  EXPECT_EQ(line.esc(0).al_state(), AlState::SafeOp);
+  EXPECT_EQ(line.master->fprd16(0x1001, 0x0130), 0x0014);
+  EXPECT_EQ(line.master->fprd16(0x1001, 0x0134), 0x0070);
+  // A "fall" upwards keeps the state; the code is updated.
+  line.esc(0).application_error(AlState::Op, 0x0071);
+  EXPECT_EQ(line.esc(0).al_state(), AlState::SafeOp);
+  EXPECT_EQ(line.esc(0).al_status_code(), 0x0071);
+  // BOOT is not below SAFEOP in the state machine.
+  line.esc(0).application_error(AlState::Boot, 0x0072);
+  EXPECT_EQ(line.esc(0).al_state(), AlState::SafeOp);
+  // The master acknowledges and goes on.
+  EXPECT_EQ(line.master->request_state(0x1001, 0x14), 0x0004);
+}
+
+}  // namespace
+}  // namespace rackcat::ecat::test
