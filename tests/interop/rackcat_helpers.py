@@ -1,0 +1,327 @@
+"""Shared pieces of the rackcat interop tests: the real device (`rackcat run`) in a private
+network namespace over a veth pair, driven by pysoem (SOEM) from the host end.
+
+The namespace, veth pair and process handling come from conftest.py (VethNamespace,
+SlaveProcess); this module adds what the rackcat tests need on top: the `rackcat` fixture
+(start, restart with the same state directory, control API calls inside the namespace), a
+pysoem master walking the ESM, the PDO map read back over SDO, and the byte sequences of the
+command objects.
+
+RACKCAT_BUILD_DIR selects the build directory (default build/); Release builds only: SOEM
+drops replies later than 2 ms during configuration.
+"""
+import contextlib
+import json
+import os
+import shutil
+import struct
+import subprocess
+import time
+from dataclasses import dataclass, field
+
+import pytest
+
+from conftest import BUILD, SlaveProcess, VethNamespace, require_root, tshark_problems
+
+pysoem = pytest.importorskip("pysoem", reason="pysoem not installed (scripts/setup.sh)")
+
+RACKCAT = BUILD / "rackcat"
+CONTROL_PORT = 8765
+# Generous per-cycle receive timeout: the machine is shared, a late frame is not a lost one.
+RECEIVE_TIMEOUT_US = 20_000
+CYCLE_S = 0.001
+
+# Command byte sequences (guide Appendix A, ETG.5003.1 command objects).
+STORE_SAVE = b"save"  # 0xFBF2:01, 0x73 0x61 0x76 0x65
+EXCEPTION_RESET = bytes([0x74, 0x65, 0x73, 0x65, 0x72])  # 0xFBF1:01, "reset" reversed
+
+# The default rack (examples/default-rack.yaml, docs/MDP.md): module numbers are RIM by RIM,
+# slot by slot; RIM 1 has cards in slots 1..19, RIM 2 in slots 1..8 (modules 20..27).
+DEFAULT_MODULES = 27
+DO_MODULE = 1  # RIM 1 slot 1 CDO-10, 16x sourcing DO, RxPDO 0x1600 -> 0x7000:01 (16 bits)
+DI_LOOPBACK_MODULE = 2  # RIM 1 slot 2 CDI-10, loopback-wired to slot 1 -> 0x6010:01
+UART_MODULE = 19  # RIM 1 slot 19 CUR-12
+
+
+def require_rackcat():
+    require_root()
+    if not RACKCAT.exists():
+        pytest.skip(f"{RACKCAT} not built (cmake --build build --target rackcat; "
+                    "RACKCAT_BUILD_DIR selects another build directory)")
+
+
+def rackcat_tool(*args, **kw):
+    """Runs a rackcat subcommand that needs no network (sii, esi, od)."""
+    return subprocess.run([str(RACKCAT), *map(str, args)], check=True, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, timeout=60, **kw)
+
+
+def sii_image(tmp_path, config=None):
+    """The EEPROM image `rackcat sii -o FILE [--config FILE]` writes."""
+    out = tmp_path / f"sii-{time.monotonic_ns()}.bin"
+    args = ["sii", "-o", out] + (["--config", config] if config else [])
+    rackcat_tool(*args)
+    return out.read_bytes()
+
+
+# Real-time priority for the slave and the master, as EtherCAT masters and slaves normally run:
+# on a loaded 2-core machine plain scheduling delays alone (35 ms seen) exceed SOEM's 20 ms
+# mailbox-send timeout. Both block in recv/sleep, so SCHED_FIFO does not starve the machine.
+RT_PRIORITY = 10
+
+
+def rt_prefix():
+    if shutil.which("chrt") and subprocess.run(["chrt", "-f", str(RT_PRIORITY), "true"],
+                                               stderr=subprocess.DEVNULL).returncode == 0:
+        return ["chrt", "-f", str(RT_PRIORITY)]
+    return []
+
+
+@contextlib.contextmanager
+def realtime_master():
+    """SCHED_FIFO for this (the master's) process; children forked meanwhile (curl, tshark)
+    get the normal policy back (SCHED_RESET_ON_FORK)."""
+    old = os.sched_getscheduler(0), os.sched_getparam(0)
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK,
+                              os.sched_param(RT_PRIORITY))
+    except OSError:
+        old = None
+    try:
+        yield
+    finally:
+        if old is not None:
+            os.sched_setscheduler(0, old[0], old[1])
+
+
+class Rackcat:
+    """One `rackcat run` in its namespace; restart() keeps the namespace and state directory."""
+
+    def __init__(self, tmp_path, slaves, config, state_dir, pcap, extra):
+        self.tmp_path = tmp_path
+        self.slaves = slaves
+        self.config = config
+        self.state_dir = state_dir or (tmp_path / "state")
+        self.pcap_enabled = pcap
+        self.extra = list(extra)
+        self.ns = VethNamespace().__enter__()
+        self.iface = self.ns.master_iface
+        self.runs = 0
+        self.proc = None
+        self.start()
+
+    def start(self):
+        self.runs += 1
+        args = ["--state-dir", str(self.state_dir)] + self.extra
+        if self.config:
+            args += ["--config", str(self.config)]
+        cap = self.tmp_path / f"rackcat{self.runs}.pcap" if self.pcap_enabled else None
+        template = f"{RACKCAT} run --iface {{iface}} --slaves {{slaves}}"
+        self.proc = SlaveProcess(self.ns, template, self.slaves, args, cap,
+                                 self.tmp_path / f"rackcat{self.runs}.log", rt_prefix())
+        self.proc.wait_ready(self.slaves)
+        if "--no-control" not in self.extra:
+            self._wait_control_api()
+        return self
+
+    def stop(self):
+        rc = self.proc.stop()
+        assert rc == 0, f"rackcat exited with {rc}:\n{self.proc.log()}"
+        return rc
+
+    def restart(self):
+        self.stop()
+        return self.start()
+
+    def close(self):
+        if self.proc is not None:
+            self.proc.stop()
+        self.ns.__exit__(None, None, None)
+
+    def log(self):
+        return self.proc.log()
+
+    @property
+    def pcap(self):
+        return self.proc.pcap
+
+    # --- control API (HTTP + JSON on 127.0.0.1 inside the namespace) ---------------------
+
+    def ctl(self, method, path, body=None, expect=200):
+        """One control API request, made from inside the slave's namespace."""
+        cmd = self.ns.exec_prefix() + ["curl", "-s", "-S", "--max-time", "10", "-X", method,
+                                       "-w", "\n%{http_code}"]
+        if body is not None:
+            cmd += ["-H", "Content-Type: application/json", "--data", json.dumps(body)]
+        cmd.append(f"http://127.0.0.1:{CONTROL_PORT}{path}")
+        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           timeout=20)
+        assert r.returncode == 0, f"control API {method} {path}: {r.stderr}"
+        text, _, code = r.stdout.rpartition("\n")
+        assert int(code) == expect, f"control API {method} {path} -> {code}: {text}"
+        return json.loads(text) if text else None
+
+    def _wait_control_api(self):
+        deadline = time.monotonic() + 10
+        while True:
+            try:
+                self.ctl("GET", "/api/esm")
+                return
+            except AssertionError:
+                if time.monotonic() > deadline:
+                    raise
+
+
+@pytest.fixture
+def rackcat(tmp_path):
+    """Factory: rackcat(slaves=1, config=None, state_dir=None, pcap=True, extra=()) -> Rackcat.
+
+    Starts `rackcat run` on the slave end of a fresh veth pair and waits until it answers a
+    BRD; everything is torn down after the test."""
+    require_rackcat()
+    started = []
+
+    def start(slaves=1, config=None, state_dir=None, pcap=True, extra=()):
+        sub = tmp_path / f"run{len(started)}"
+        sub.mkdir()
+        r = Rackcat(sub, slaves, config, state_dir, pcap, extra)
+        started.append(r)
+        return r
+
+    with realtime_master():
+        yield start
+    for r in reversed(started):
+        r.close()
+
+
+# --- the master ------------------------------------------------------------------------
+
+
+def open_master(iface, expected_slaves=1):
+    master = pysoem.Master()
+    master.open(iface)
+    n = 0
+    for _ in range(20):
+        n = master.config_init()
+        if n == expected_slaves:
+            break
+        time.sleep(0.1)
+    assert n == expected_slaves, f"config_init found {n} slaves, expected {expected_slaves}"
+    assert master.state_check(pysoem.PREOP_STATE, 2_000_000) == pysoem.PREOP_STATE
+    master.read_state()
+    return master
+
+
+def go(master, state, timeout_us=3_000_000):
+    master.state = state
+    master.write_state()
+    reached = master.state_check(state, timeout_us)
+    master.read_state()
+    detail = [(s.name, hex(s.state), hex(s.al_status)) for s in master.slaves[:4]]
+    assert reached == state, f"state {hex(state)} not reached: {detail}"
+
+
+def cycle(master):
+    master.send_processdata()
+    return master.receive_processdata(RECEIVE_TIMEOUT_US)
+
+
+def to_op(master):
+    go(master, pysoem.SAFEOP_STATE)
+    cycle(master)
+    master.state = pysoem.OP_STATE
+    master.write_state()
+    for _ in range(300):
+        cycle(master)
+        if master.state_check(pysoem.OP_STATE, 1000) == pysoem.OP_STATE:
+            break
+    go(master, pysoem.OP_STATE)
+
+
+def run_cycles(master, n, until=None, sleep=True):
+    """n process-data cycles at about 1 ms; returns the last working counter. `until(wkc)`
+    stops early when it returns True."""
+    wkc = None
+    next_t = time.monotonic()
+    for _ in range(n):
+        wkc = cycle(master)
+        if until is not None and until(wkc):
+            break
+        if sleep:
+            next_t += CYCLE_S
+            delay = next_t - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+    return wkc
+
+
+def sdo_u(slave, index, sub, fmt):
+    return struct.unpack(fmt, slave.sdo_read(index, sub))[0]
+
+
+@dataclass
+class PdoEntry:
+    index: int
+    sub: int
+    bits: int
+    bit_offset: int  # from the start of the slave's output (RxPDO) or input (TxPDO) image
+
+
+@dataclass
+class PdoMap:
+    outputs: list = field(default_factory=list)
+    inputs: list = field(default_factory=list)
+    output_bits: int = 0
+    input_bits: int = 0
+
+    def find(self, index, sub, direction):
+        for e in self.outputs if direction == "out" else self.inputs:
+            if (e.index, e.sub) == (index, sub):
+                return e
+        raise AssertionError(f"0x{index:04X}:{sub:02X} not mapped ({direction})")
+
+
+def read_pdo_map(slave):
+    """The process image layout as a master computes it: 0x1C12/0x1C13 assignments, then each
+    PDO's entries in order (ETG.1000.6 §5.6.7.4), over SDO."""
+    pm = PdoMap()
+    for assign, entries, attr in ((0x1C12, pm.outputs, "output_bits"),
+                                  (0x1C13, pm.inputs, "input_bits")):
+        bit = 0
+        for k in range(1, sdo_u(slave, assign, 0, "<B") + 1):
+            pdo = sdo_u(slave, assign, k, "<H")
+            for e in range(1, sdo_u(slave, pdo, 0, "<B") + 1):
+                m = sdo_u(slave, pdo, e, "<I")
+                entries.append(PdoEntry(m >> 16, (m >> 8) & 0xFF, m & 0xFF, bit))
+                bit += m & 0xFF
+        setattr(pm, attr, bit)
+    return pm
+
+
+def get_bits(image, entry):
+    value = int.from_bytes(bytes(image), "little")
+    return (value >> entry.bit_offset) & ((1 << entry.bits) - 1)
+
+
+def set_bits(image, entry, v):
+    value = int.from_bytes(bytes(image), "little")
+    mask = ((1 << entry.bits) - 1) << entry.bit_offset
+    value = (value & ~mask) | ((v << entry.bit_offset) & mask)
+    return value.to_bytes(len(image), "little")
+
+
+def check_capture(pcap):
+    """Every captured frame dissects as EtherCAT and tshark finds nothing malformed."""
+    total, ecat, bad = tshark_problems(pcap)
+    assert total > 0, "empty capture"
+    assert ecat == total, f"{total - ecat} of {total} captured frames not dissected as EtherCAT"
+    assert bad == [], "tshark reports malformed frames / errors:\n" + "\n".join(bad[:20])
+
+
+def abort_code(fn, *args, **kw):
+    """The SDO abort code `fn` raised as pysoem.SdoError (fails if it succeeded)."""
+    try:
+        fn(*args, **kw)
+    except pysoem.SdoError as e:
+        return e.abort_code
+    raise AssertionError(f"{fn.__name__}{args} succeeded, an SDO abort was expected")

@@ -1,0 +1,93 @@
+"""[esi] One source for the SII, the ESI and the object dictionary, checked on the wire: the
+EEPROM bytes SOEM reads from the running slave (pysoem eeprom_read over veth) equal `rackcat
+sii -o FILE` byte for byte, and the ESI file describes the identity, mailbox and process-data
+SyncManagers the master finds, for the default rack and for a rack file.
+"""
+import struct
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from rackcat_helpers import (go, open_master, pysoem, rackcat, rackcat_tool, sii_image,
+                             to_op)
+
+assert rackcat  # the fixture, imported for pytest
+
+TINY_RACK = """\
+control_module:
+  part_number: FI-CM0100-00
+  serial_number: FI-CM0100-00-0042
+  product_code: 0x00464E02
+  revision: 0x00020001
+  serial: 42
+rims:
+  - rim: 1
+    type: 6-slot
+    slots:
+      - {slot: 1, card: CDO-10}
+      - {slot: 2, card: CDI-10, loopback: {rim: 1, slot: 1}}
+      - {slot: 4, card: CAI-11}
+"""
+
+
+def esi_hex(text):
+    assert text.startswith("#x"), text
+    return int(text[2:], 16)
+
+
+@pytest.mark.parametrize("rack", ["default", "tiny"])
+def test_sii_on_the_wire_equals_rackcat_sii_and_esi(rackcat, tmp_path, rack):
+    config = None
+    if rack == "tiny":
+        config = tmp_path / "tiny-rack.yaml"
+        config.write_text(TINY_RACK)
+    image = sii_image(tmp_path, config)
+    # ETG.2010: word 0x3E = EEPROM size in KiBit - 1; the image is the whole EEPROM.
+    size_kbit = struct.unpack_from("<H", image, 0x3E * 2)[0] + 1
+    assert len(image) == size_kbit * 1024 // 8
+    vendor, product, revision, serial = struct.unpack_from("<IIII", image, 0x08 * 2)
+    if rack == "tiny":
+        assert (product, revision, serial) == (0x00464E02, 0x00020001, 42)
+
+    esi_file = tmp_path / "rack.xml"
+    rackcat_tool("esi", "-o", esi_file, *(["--config", config] if config else []))
+    esi = ET.parse(esi_file).getroot()
+    device = esi.find("./Descriptions/Devices/Device")
+    dtype = device.find("Type")
+    assert esi_hex(esi.find("./Vendor/Id").text) == vendor
+    assert (esi_hex(dtype.get("ProductCode")), esi_hex(dtype.get("RevisionNo"))) == \
+        (product, revision)
+    # Eeprom ConfigData = SII words 0..7; ByteSize = the image size.
+    assert bytes.fromhex(device.find("./Eeprom/ConfigData").text) == image[:16]
+    assert int(device.find("./Eeprom/ByteSize").text) == len(image)
+    sms = device.findall("Sm")
+
+    rc = rackcat(config=config)
+    master = open_master(rc.iface, 1)
+    try:
+        s = master.slaves[0]
+        # Every SII word as SOEM reads it (4 bytes per read), byte for byte.
+        read = b"".join(s.eeprom_read(w, 20_000) for w in range(0, len(image) // 2, 2))
+        assert len(read) == len(image)
+        diff = [i for i in range(len(image)) if read[i] != image[i]]
+        assert diff == [], f"{len(diff)} bytes differ, first at 0x{diff[0]:04X}"
+        # SII identity = 0x1018 = ESI Type.
+        assert (s.man, s.id, s.rev) == (vendor, product, revision)
+        assert struct.unpack("<IIII", s.sdo_read(0x1018, 0, ca=True)[2:]) == \
+            (vendor, product, revision, serial)
+        # SII standard mailbox (words 0x18..0x1B) = ESI Sm 0/1.
+        rx_off, rx_size, tx_off, tx_size = struct.unpack_from("<HHHH", image, 0x18 * 2)
+        assert (esi_hex(sms[0].get("StartAddress")), int(sms[0].get("DefaultSize"))) == \
+            (rx_off, rx_size)
+        assert (esi_hex(sms[1].get("StartAddress")), int(sms[1].get("DefaultSize"))) == \
+            (tx_off, tx_size)
+        # ESI Sm 2/3 default sizes = the process image SOEM maps from the default PDO
+        # assignment, and the ESM accepts that mapping (SAFEOP, OP).
+        master.config_map()
+        assert (len(s.output), len(s.input)) == (int(sms[2].get("DefaultSize")),
+                                                 int(sms[3].get("DefaultSize")))
+        to_op(master)
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    rc.stop()
