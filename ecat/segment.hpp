@@ -6,6 +6,8 @@
 //   rackcat::ecat::Segment segment({&device_a, &device_b});
 //   size_t n = segment.process(frame);            // in place; send frame[0..n) back, 0 = drop
 //   timer at segment.next_event_ns(): segment.service();
+// Not thread-safe: process(), service() and every Esc/Application call belong to one thread
+// (the link's event loop); other threads post work to it.
 #pragma once
 
 #include <cstddef>
