@@ -10,6 +10,7 @@ command objects.
 RACKCAT_BUILD_DIR selects the build directory (default build/); Release builds only: SOEM
 drops replies later than 2 ms during configuration.
 """
+import concurrent.futures
 import contextlib
 import json
 import os
@@ -160,6 +161,16 @@ class Rackcat:
         text, _, code = r.stdout.rpartition("\n")
         assert int(code) == expect, f"control API {method} {path} -> {code}: {text}"
         return json.loads(text) if text else None
+
+    def ctl_while_cycling(self, master, method, path, body=None):
+        """A control API request made while the master keeps exchanging process data (in OP
+        the SM watchdog expires after 100 ms without frames; curl may take longer)."""
+        with concurrent.futures.ThreadPoolExecutor(1) as pool:
+            future = pool.submit(self.ctl, method, path, body)
+            while not future.done():
+                cycle(master)
+                time.sleep(CYCLE_S)
+            return future.result()
 
     def _wait_control_api(self):
         deadline = time.monotonic() + 10

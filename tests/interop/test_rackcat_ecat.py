@@ -5,10 +5,11 @@ loopback wiring, a 16-slave segment, back to INIT, and a capture that Wireshark 
 """
 import os
 import struct
+import time
 
-from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, abort_code, check_capture, cycle,
-                             get_bits, go, open_master, pysoem, rackcat, read_pdo_map,
-                             set_bits, sii_image, to_op)
+from rackcat_helpers import (CYCLE_S, DI_LOOPBACK_MODULE, DO_MODULE, abort_code,
+                             check_capture, cycle, get_bits, go, open_master, pysoem, rackcat,
+                             read_pdo_map, set_bits, sii_image, to_op)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -113,7 +114,12 @@ def _cyclic(rc, slaves, cycles, reduced_map=False):
         block = 20
         bad_wkc, bad_data, stale = [], [], []
         previous = [None] * slaves
+        next_t = time.monotonic()
         for c in range(cycles):
+            next_t += CYCLE_S  # paced at the SYNC0 period, as a master's cyclic task
+            delay = next_t - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
             pattern = [((c // block) * 0x3B1D + i * 0x0101) & 0xFFFF for i in range(slaves)]
             for i, s in enumerate(master.slaves):
                 s.output = set_bits(s.output, do, pattern[i])
@@ -129,6 +135,10 @@ def _cyclic(rc, slaves, cycles, reduced_map=False):
                     stale.append((c, i, hex(got), hex(pattern[i])))
             if c % block == block - 1:
                 previous = pattern
+        # The slave's application (slot card driver) holds what the master wrote last.
+        module = rc.ctl_while_cycling(master, "GET", f"/api/modules/{DO_MODULE}")
+        commanded = sum(int(o["commanded"]) << o["channel"] for o in module["outputs"])
+        assert commanded == pattern[0], (hex(commanded), hex(pattern[0]))
         assert bad_wkc == [], f"{len(bad_wkc)} cycles with WKC != {expected}: {bad_wkc[:10]}"
         assert bad_data == [], f"{len(bad_data)} wrong loopback inputs: {bad_data[:10]}"
         assert stale == [], f"{len(stale)} blocks whose outputs never came back: {stale[:10]}"
