@@ -68,6 +68,44 @@ pub fn validate_wires(wires: &[Wire], out_len: usize, in_len: usize) -> Result<(
     Ok(())
 }
 
+/// The LRW working counter ethercrab's `tx_rx` returns: the sum over the frames the group
+/// image is cut into. ethercrab lays the image out as all SubDevices' inputs, then all their
+/// outputs (byte aligned, in SubDevice order), and sends it in LRW datagrams of `chunk` bytes,
+/// the first one `first_chunk` bytes (shorter when a DC FRMW shares the first frame).
+/// Per datagram each SubDevice adds 1 when its input FMMU is hit and 2 when its output FMMU is
+/// (ETG.1000.4 §5.4.3, LRW), so a SubDevice whose area straddles two datagrams counts twice.
+pub fn expected_lrw_wkc(
+    in_lens: &[usize],
+    out_lens: &[usize],
+    first_chunk: usize,
+    chunk: usize,
+) -> u16 {
+    let mut areas: Vec<(usize, usize, u16)> = Vec::new();
+    let mut at = 0usize;
+    for &len in in_lens {
+        areas.push((at, at + len, 1));
+        at += len;
+    }
+    for &len in out_lens {
+        areas.push((at, at + len, 2));
+        at += len;
+    }
+    let total = at;
+    let mut wkc = 0u16;
+    let mut start = 0usize;
+    while start < total {
+        let len = if start == 0 { first_chunk } else { chunk }.max(1);
+        let end = (start + len).min(total);
+        for &(a, b, inc) in &areas {
+            if a < b && a < end && start < b {
+                wkc += inc;
+            }
+        }
+        start = end;
+    }
+    wkc
+}
+
 const MAX_REPORTED: usize = 5;
 pub const LAG_BUCKETS: usize = 16;
 
@@ -311,6 +349,34 @@ mod tests {
             set_bit(&mut inputs, 8, get_bit(&outputs, 1));
         }
         assert_eq!(c.mismatches, 0, "{:?}", c.failures);
+    }
+
+    #[test]
+    fn lrw_wkc_counts_each_datagram_an_area_touches() {
+        // one frame: 2 per output area, 1 per input area, nothing for an empty area
+        assert_eq!(expected_lrw_wkc(&[4], &[4], 1100, 1100), 3);
+        assert_eq!(expected_lrw_wkc(&[4, 4], &[4, 0], 1100, 1100), 1 + 1 + 2);
+        // inputs 0..600 and 600..1200, outputs 1200..1260 and 1260..1320, datagrams of 1000:
+        // 0..1000 hits in0 and in1; 1000..1320 hits in1, out0 and out1
+        assert_eq!(
+            expected_lrw_wkc(&[600, 600], &[60, 60], 1000, 1000),
+            1 + 1 + 1 + 2 + 2
+        );
+        // 16 default racks (548 input, 60 output bytes each): inputs end at 8768, the image
+        // at 9728. Datagrams of 1100: cuts at 1100..7700 split 7 input areas, the cut at 8800
+        // splits output area 0.
+        assert_eq!(
+            expected_lrw_wkc(&[548; 16], &[60; 16], 1100, 1100),
+            16 + 7 + 32 + 2
+        );
+        // With DC the FRMW takes 20 bytes of the first frame, so datagrams are 1080, 1100, ..:
+        // the cut at 5480 = 10 x 548 falls between two input areas, 6 input areas are split
+        // and output area 0 is split at 8780. Seen on the wire with rackcat: 2,3,3,3,3,3,3,4,32.
+        assert_eq!(
+            expected_lrw_wkc(&[548; 16], &[60; 16], 1080, 1100),
+            2 + 3 * 6 + 4 + 32
+        );
+        assert_eq!(expected_lrw_wkc(&[], &[], 1100, 1100), 0);
     }
 
     #[test]

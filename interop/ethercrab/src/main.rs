@@ -31,7 +31,9 @@ const MAX_SUBDEVICES: usize = 32;
 /// Whole process image of the group, inputs and outputs (16 default racks need ~16 KiB).
 const MAX_PDI: usize = 32768;
 const MAX_FRAMES: usize = 16;
-const MAX_PDU_DATA: usize = PduStorage::element_size(1100);
+/// LRW payload per frame: ethercrab cuts the group image into datagrams of this size.
+const PDU_PAYLOAD: usize = 1100;
+const MAX_PDU_DATA: usize = PduStorage::element_size(PDU_PAYLOAD);
 
 static PDU_STORAGE: PduStorage<MAX_FRAMES, MAX_PDU_DATA> = PduStorage::new();
 
@@ -517,13 +519,12 @@ async fn check_coe<'a>(
                 }
             };
             let value = o.string_value.as_bytes();
-            let mut alt = o.string_value.clone().into_bytes();
-            alt.reverse();
+            let alt = o.string_value_segmented.as_bytes();
             let attempts: [(&str, &[u8], Option<usize>, Option<usize>); 2] = [
                 ("normal", value, None, None),
                 // 3 bytes in the initiate, then 5-byte segments: exercises toggling, padding
                 // to 7 bytes and the unused-bytes field.
-                ("segmented", &alt, Some(3), Some(5)),
+                ("segmented", alt, Some(3), Some(5)),
             ];
             for (kind, data, first, seg) in attempts {
                 match mbx.download(sub, si, ss, data, first, seg).await {
@@ -896,11 +897,13 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
         .await
         .map_err(|e| format!("PDO mapping / FMMU configuration (into_pre_op_pdi): {e}"))?;
     let mut checks = Vec::new();
-    let mut expected_wkc = 0u16;
+    let mut in_lens = Vec::new();
+    let mut out_lens = Vec::new();
     for (i, sd) in group.iter(md).enumerate() {
         let out_len = sd.outputs_raw().len();
         let in_len = sd.inputs_raw().len();
-        expected_wkc += if out_len > 0 { 2 } else { 0 } + if in_len > 0 { 1 } else { 0 };
+        in_lens.push(in_len);
+        out_lens.push(out_len);
         r.info(format!(
             "SubDevice {i}: process data {out_len} output bytes, {in_len} input bytes"
         ));
@@ -947,12 +950,24 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
         );
         checks.push(LoopbackCheck::new(wires, o.hold_cycles, i as u64 + 1));
     }
+    // With SYNC0, ethercrab puts an FRMW of the DC system time (8 bytes + 12 of PDU overhead)
+    // in front of the first LRW, which shortens the first datagram.
+    let use_dc = o.sync0 && dc_capable > 0;
+    let first_chunk = if use_dc {
+        PDU_PAYLOAD - 20
+    } else {
+        PDU_PAYLOAD
+    };
+    let expected_wkc = loopback::expected_lrw_wkc(&in_lens, &out_lens, first_chunk, PDU_PAYLOAD);
+    let image: usize = in_lens.iter().chain(&out_lens).sum();
     r.check(
         expected_wkc > 0,
-        format!("PDO mapping gives a process image (expected LRW working counter {expected_wkc})"),
+        format!(
+            "PDO mapping gives a {image}-byte process image, expected LRW working counter {expected_wkc} (summed over datagrams of {first_chunk}, then {PDU_PAYLOAD} bytes)"
+        ),
     );
 
-    if o.sync0 && dc_capable > 0 {
+    if use_dc {
         let group = group
             .configure_dc_sync(
                 md,

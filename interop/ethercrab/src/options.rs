@@ -29,6 +29,8 @@ pub struct Options {
     /// Writable string object exercised with normal and segmented SDO downloads.
     pub string_object: (u16, u8),
     pub string_value: String,
+    /// Value written with the segmented download (must differ from `string_value`).
+    pub string_value_segmented: String,
     /// Writable object of at most 4 bytes exercised with an expedited download.
     pub u32_object: (u16, u8),
     pub verbose: bool,
@@ -50,7 +52,10 @@ usage: ethercrab-interop --iface IFACE [options]
   --expect-vendor HEX      expected vendor id (checked against SII and 0x1018:01)
   --expect-product HEX     expected product code (checked against SII and 0x1018:02)
   --string-object IDX:SUB  writable string for normal/segmented downloads (default 0x2000:04)
-  --string-value TEXT      value written there (default 10.11.12.13, restored afterwards)
+  --string-value TEXT      value written there with a normal download (default 10.11.12.13)
+  --string-value-segmented TEXT
+                           value written with a segmented download (default 10.21.32.43);
+                           the original value is restored afterwards
   --u32-object IDX:SUB     writable 32-bit object for expedited download (default 0x2000:09)
   -v, --verbose            print every check, not only failures
 Environment: RUST_LOG=error|warn|info|debug|trace shows ethercrab's own log (default warn).
@@ -120,6 +125,7 @@ impl Options {
             expect_product: None,
             string_object: (0x2000, 0x04),
             string_value: "10.11.12.13".to_string(),
+            string_value_segmented: "10.21.32.43".to_string(),
             u32_object: (0x2000, 0x09),
             verbose: false,
         };
@@ -149,6 +155,7 @@ impl Options {
                 "--expect-product" => o.expect_product = Some(parse_u32(&value(&arg)?)?),
                 "--string-object" => o.string_object = parse_object(&value(&arg)?)?,
                 "--string-value" => o.string_value = value(&arg)?,
+                "--string-value-segmented" => o.string_value_segmented = value(&arg)?,
                 "--u32-object" => o.u32_object = parse_object(&value(&arg)?)?,
                 "-v" | "--verbose" => o.verbose = true,
                 "-h" | "--help" => return Err(String::new()),
@@ -157,6 +164,11 @@ impl Options {
         }
         if o.iface.is_empty() {
             return Err("--iface is required".to_string());
+        }
+        if o.string_value == o.string_value_segmented {
+            return Err(
+                "the two string values must differ, or a failed write goes unseen".to_string(),
+            );
         }
         if o.cycle_time.is_zero() {
             return Err("--cycle-us must be above 0".to_string());
