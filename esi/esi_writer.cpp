@@ -209,8 +209,12 @@ class DictionaryWriter {
       elems.append_child("BitSize").text().set(n * first.bit_length);
       elems.append_child("BitOffs").text().set(first.bit_offset);
       flags(elems, first.access, true);
+      // Defaults for the elements in use (subindex 0 = count, ETG.1000.6 §5.6.7.4.2); the
+      // slots above it hold no configuration (0xF030, 0x1C12 with 255 slots, UART buffers).
+      const uint8_t in_use = obj.sub0();
       for (const auto& e : es) {
         if (!is_readable(e.access)) continue;
+        if (e.subindex > in_use) break;
         auto si = info.append_child("SubItem");
         text_child(si, "Name", fmt::format("SubIndex {:03d}", e.subindex));
         default_info(si.append_child("Info"), obj, e);
@@ -489,7 +493,8 @@ std::string write_esi(const EsiContent& c) {
   }
 
   StringWriter w;
-  doc.save(w, "  ", pugi::format_default, pugi::encoding_utf8);
+  // Tabs, as vendor ESI files use: one byte per level keeps large racks small.
+  doc.save(w, "\t", pugi::format_default, pugi::encoding_utf8);
   return std::move(w.out);
 }
 

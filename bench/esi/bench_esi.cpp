@@ -162,6 +162,15 @@ void BM_SiiOnly120ModuleRackFile(benchmark::State& state) {
 }
 BENCHMARK(BM_SiiOnly120ModuleRackFile)->Unit(benchmark::kMillisecond);
 
+// The ETG.5001 module descriptions (a catalogue device built by mdp): part of every ESI.
+void BM_DescribeModuleTypes(benchmark::State& state) {
+  for (auto _ : state) {
+    auto modules = describe_module_types();
+    benchmark::DoNotOptimize(modules.data());
+  }
+}
+BENCHMARK(BM_DescribeModuleTypes)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 }  // namespace rackcat::esi
 

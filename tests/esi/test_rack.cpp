@@ -1,0 +1,196 @@
+// The SII and ESI of real racks built by mdp: the tiny test rack, the default rack and a
+// generated 120-module rack (5 x 24 slots). Each ESI validates against the ETG.2000 schema and
+// agrees with the device's live dictionary; the SII agrees with both.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <map>
+#include <pugixml.hpp>
+#include <set>
+
+#include "esi/rack.hpp"
+#include "esi/sii_parser.hpp"
+#include "mdp/card_catalogue.hpp"
+#include "mdp/device.hpp"
+#include "mdp/rack_config.hpp"
+#include "mdp/sync_manager_layout.hpp"
+#include "tests/esi/esi_checks.hpp"
+
+namespace rackcat::esi {
+namespace {
+
+mdp::DeviceOptions no_state() {
+  mdp::DeviceOptions o;
+  o.load_stored_parameters = false;
+  return o;
+}
+
+std::string rack_120_yaml() {
+  std::string yaml = "rims:\n";
+  auto cards = mdp::card_catalogue();
+  for (int rim = 1; rim <= 5; ++rim) {
+    yaml += "  - rim: " + std::to_string(rim) + "\n    type: 24-slot\n    slots:\n";
+    for (int slot = 1; slot <= 24; ++slot) {
+      const auto& card = cards[static_cast<size_t>((rim - 1) * 24 + slot - 1) % cards.size()];
+      yaml += "      - {slot: " + std::to_string(slot) + ", card: \"" + std::string(card.name) +
+              "\"}\n";
+    }
+  }
+  return yaml;
+}
+
+mdp::RackConfig rack(const std::string& which) {
+  if (which == "tiny") return mdp::load_rack_config(RACKCAT_ESI_TEST_DATA "/tiny-rack.yaml");
+  if (which == "default") return mdp::default_rack();
+  return mdp::parse_rack_config(rack_120_yaml(), "<120 modules>");
+}
+
+class RackEsi : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override { device = std::make_unique<mdp::Device>(rack(GetParam()), no_state()); }
+  std::unique_ptr<mdp::Device> device;
+};
+
+TEST_P(RackEsi, ValidatesAgainstTheEtg2000Schema) {
+  if (testing::schema_dir().empty())
+    GTEST_SKIP() << "ESI schema not found at " RACKCAT_ESI_SCHEMA_DIR;
+  EXPECT_EQ(testing::validate_with_xmllint(write_esi(*device), GetParam()), "ok");
+}
+
+TEST_P(RackEsi, DictionaryPdosAndSmsMatchTheLiveDevice) {
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_string(write_esi(*device).c_str()));
+  auto dev = doc.select_node("/EtherCATInfo/Descriptions/Devices/Device").node();
+  testing::expect_dictionary_matches(dev, device->dictionary());
+  testing::expect_pdos_and_sms_match(dev, describe_device(*device));
+}
+
+TEST_P(RackEsi, SiiIdentityEqualsIdentityObjectAndEsiType) {
+  auto info = parse_sii(build_sii(*device).span());
+  const auto* identity = device->dictionary().find(0x1018);
+  ASSERT_NE(identity, nullptr);
+  EXPECT_EQ(info.vendor_id, identity->get_u(1));
+  EXPECT_EQ(info.product_code, identity->get_u(2));
+  EXPECT_EQ(info.revision, identity->get_u(3));
+  EXPECT_EQ(info.serial, identity->get_u(4));
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_string(write_esi(*device).c_str()));
+  auto type = doc.select_node("//Devices/Device/Type").node();
+  EXPECT_EQ(std::stoul(type.attribute("ProductCode").value() + 2, nullptr, 16), info.product_code);
+  EXPECT_EQ(std::stoul(type.attribute("RevisionNo").value() + 2, nullptr, 16), info.revision);
+  EXPECT_EQ(std::stoul(doc.select_node("//Vendor/Id").node().text().get() + 2, nullptr, 16),
+            info.vendor_id);
+}
+
+TEST_P(RackEsi, SiiMailboxAndSmsEqualEsiSmAndTheEsmChecks) {
+  auto img = build_sii(*device);
+  auto info = parse_sii(img.span());
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_string(write_esi(*device).c_str()));
+  std::vector<pugi::xml_node> sms;
+  for (auto s : doc.select_node("//Devices/Device").node().children("Sm")) sms.push_back(s);
+  ASSERT_EQ(sms.size(), 4u);
+  auto hex = [](const char* v) { return std::stoul(std::string(v).substr(2), nullptr, 16); };
+  EXPECT_EQ(info.standard_receive_offset, hex(sms[0].attribute("StartAddress").value()));
+  EXPECT_EQ(info.standard_receive_size, sms[0].attribute("DefaultSize").as_uint());
+  EXPECT_EQ(info.standard_send_offset, hex(sms[1].attribute("StartAddress").value()));
+  EXPECT_EQ(info.standard_send_size, sms[1].attribute("DefaultSize").as_uint());
+  EXPECT_EQ(info.standard_receive_offset, mdp::sm::kMailboxOutStart);
+  EXPECT_EQ(info.standard_receive_size, mdp::sm::kMailboxOutSize);
+  EXPECT_EQ(info.standard_send_offset, mdp::sm::kMailboxInStart);
+  EXPECT_EQ(info.standard_send_size, mdp::sm::kMailboxInSize);
+  ASSERT_EQ(info.sms.size(), 4u);
+  // The process-data SM lengths are what the device expects at PREOP->SAFEOP.
+  EXPECT_EQ(info.sms[2].length, device->output_bytes());
+  EXPECT_EQ(info.sms[3].length, device->input_bytes());
+  EXPECT_EQ(info.sms[2].length, sms[2].attribute("DefaultSize").as_uint());
+  EXPECT_EQ(info.sms[3].length, sms[3].attribute("DefaultSize").as_uint());
+  // ESI Eeprom = the image.
+  auto eeprom = doc.select_node("//Devices/Device/Eeprom").node();
+  EXPECT_EQ(eeprom.child("ByteSize").text().as_ullong(), img.bytes.size());
+  std::string config = eeprom.child_value("ConfigData");
+  ASSERT_EQ(config.size(), 32u);
+  for (size_t i = 0; i < 16; ++i)
+    EXPECT_EQ(std::stoul(config.substr(2 * i, 2), nullptr, 16), img.bytes[i]) << i;
+}
+
+TEST_P(RackEsi, SiiPdoCategoriesListTheAssignedPdosInOrder) {
+  auto info = parse_sii(build_sii(*device).span());
+  const auto& od = device->dictionary();
+  auto assigned = [&](uint16_t index) {
+    std::vector<uint16_t> out;
+    const auto* o = od.find(index);
+    for (uint8_t s = 1; o && s <= o->sub0(); ++s) out.push_back(static_cast<uint16_t>(o->get_u(s)));
+    return out;
+  };
+  std::vector<uint16_t> rx, tx;
+  for (const auto& p : info.rx_pdos) rx.push_back(p.index);
+  for (const auto& p : info.tx_pdos) tx.push_back(p.index);
+  EXPECT_EQ(rx, assigned(0x1C12));
+  EXPECT_EQ(tx, assigned(0x1C13));
+  for (const auto& p : info.tx_pdos) {
+    const auto* mapping = od.find(p.index);
+    ASSERT_NE(mapping, nullptr);
+    ASSERT_EQ(p.entries.size(), mapping->sub0());
+    for (size_t k = 0; k < p.entries.size(); ++k) {
+      auto v = static_cast<uint32_t>(mapping->get_u(static_cast<uint8_t>(k + 1)));
+      EXPECT_EQ(p.entries[k].index, v >> 16);
+      EXPECT_EQ(p.entries[k].subindex, (v >> 8) & 0xFF);
+      EXPECT_EQ(p.entries[k].bit_length, v & 0xFF);
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Racks, RackEsi, ::testing::Values("tiny", "default", "modules120"));
+
+TEST(RackModules, OneModulePerIdentWithItsObjectsAndPdos) {
+  auto modules = describe_module_types();
+  std::set<uint32_t> idents;
+  for (const auto& card : mdp::card_catalogue()) idents.insert(card.module_ident);
+  ASSERT_EQ(modules.size(), idents.size());
+  for (const auto& m : modules) {
+    EXPECT_TRUE(idents.count(m.ident)) << m.type;
+    const auto* card = mdp::find_card_by_ident(m.ident);
+    ASSERT_NE(card, nullptr);
+    // Module 1's indices: 0x3001 module information, inputs 0x600X / outputs 0x700X.
+    EXPECT_NE(m.dictionary.find(0x3001), nullptr) << m.type;
+    if (card->input) {
+      EXPECT_NE(m.dictionary.find(static_cast<uint16_t>(0x6000 + uint16_t(*card->input))), nullptr)
+          << m.type;
+      ASSERT_EQ(m.tx_pdos.size(), 1u) << m.type;
+      EXPECT_EQ(m.tx_pdos[0].index, 0x1A00);
+    }
+    if (card->output) {
+      EXPECT_NE(m.dictionary.find(static_cast<uint16_t>(0x7000 + uint16_t(*card->output))), nullptr)
+          << m.type;
+      ASSERT_EQ(m.rx_pdos.size(), 1u) << m.type;
+      EXPECT_EQ(m.rx_pdos[0].index, 0x1600);
+    }
+    m.dictionary.for_each([&](const coe::Object& o) {
+      EXPECT_TRUE(o.index() >= 0x3001 && o.index() <= 0x700F)
+          << m.type << fmt::format(" object 0x{:04X} outside module 1", o.index());
+    });
+  }
+}
+
+TEST(RackModules, EsiSlotsListEveryIdentWithTheMdpIncrements) {
+  mdp::Device device(mdp::default_rack(), no_state());
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_string(write_esi(device).c_str()));
+  auto slots = doc.select_node("//Devices/Device/Slots").node();
+  ASSERT_TRUE(slots);
+  EXPECT_STREQ(slots.attribute("SlotIndexIncrement").value(), "#x10");
+  EXPECT_EQ(slots.attribute("SlotPdoIncrement").as_uint(), mdp::sm::kPdoIndexIncrement);
+  std::set<std::string> in_slot;
+  for (auto id : slots.child("Slot").children("ModuleIdent")) in_slot.insert(id.text().get());
+  std::set<std::string> modules;
+  for (auto m : doc.select_nodes("//Descriptions/Modules/Module/Type"))
+    modules.insert(m.node().attribute("ModuleIdent").value());
+  EXPECT_EQ(in_slot, modules);
+  for (const auto& card : mdp::card_catalogue())
+    EXPECT_TRUE(in_slot.count(esi_hex(card.module_ident, 8))) << card.name;
+}
+
+}  // namespace
+}  // namespace rackcat::esi
