@@ -35,7 +35,9 @@ REPO = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("RACKCAT_BUILD_DIR", REPO / "build"))
 if not BUILD.is_absolute():
     BUILD = REPO / BUILD
-DEFAULT_SLAVE_CMD = f"{BUILD}/ecat_wire_slave --iface {{iface}} --slaves {{slaves}}"
+# The wire test slave (tests/ecat_wire_slave): hand-built SII, outputs looped back to inputs.
+TEST_SLAVE_CMD = f"{BUILD}/ecat_wire_slave --iface {{iface}} --slaves {{slaves}}"
+DEFAULT_SLAVE_CMD = TEST_SLAVE_CMD
 ETHERTYPE_ECAT = 0x88A4
 _counter = itertools.count()
 
@@ -184,9 +186,9 @@ def slave_cmd(request):
 
 @pytest.fixture
 def ecat_segment(slave_cmd, tmp_path):
-    """Factory: ecat_segment(slaves=1, extra_args=(), pcap=True, prefix=()) ->
-    (master_iface, slave). `prefix` goes before the command (e.g. setpriv to start it as
-    another user).
+    """Factory: ecat_segment(slaves=1, extra_args=(), pcap=True, prefix=(), cmd=None) ->
+    (master_iface, slave). `cmd` overrides the --slave-cmd template for this start; `prefix`
+    goes before the command (e.g. setpriv to start it as another user).
 
     Starts the slave in a fresh namespace and waits until it answers on the wire. Everything
     is torn down after the test.
@@ -194,13 +196,13 @@ def ecat_segment(slave_cmd, tmp_path):
     require_root()
     started = []
 
-    def start(slaves=1, extra_args=(), pcap=True, prefix=()):
+    def start(slaves=1, extra_args=(), pcap=True, prefix=(), cmd=None):
         ns = VethNamespace().__enter__()
         started.append(ns)
         n = len(started)
         cap = tmp_path / f"segment{n}.pcap" if pcap else None
-        slave = SlaveProcess(ns, slave_cmd, slaves, extra_args, cap, tmp_path / f"slave{n}.log",
-                             prefix)
+        slave = SlaveProcess(ns, cmd or slave_cmd, slaves, extra_args, cap,
+                             tmp_path / f"slave{n}.log", prefix)
         started.append(slave)
         slave.wait_ready(slaves)
         return ns.master_iface, slave
