@@ -8,6 +8,7 @@
 
 #include "modules/analog_scale.hpp"
 #include "modules/drivers.hpp"
+#include "modules/entry_slot.hpp"
 #include "modules/safe_state.hpp"
 
 namespace rackcat::modules {
@@ -37,6 +38,8 @@ class AnalogInputDriver final : public CardDriver {
         obj_(require_object(od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)),
         scale_(module_scale(od, m)),
         samples_(m.card->samples) {
+    for (size_t i = 0; i < inputs_.size(); ++i)
+      slots_.emplace_back(obj_, static_cast<uint8_t>(i + 1));
     if (samples_ > 1) {
       raw_.resize(inputs_.size());
       for (size_t i = 0; i < inputs_.size(); ++i) {
@@ -53,13 +56,16 @@ class AnalogInputDriver final : public CardDriver {
       if (samples_ == 1) {
         in.value = in.source->sample(t);
         in.code = scale_.to_code(in.value);
-        obj_.set_u(static_cast<uint8_t>(i + 1), in.code);
+        slots_[i].set(in.code);
         continue;
       }
       // Sample k at t - dt + (k+1) dt/8; element 0 is the oldest.
+      const bool varies = in.source->varies_within_cycle();
       for (unsigned k = 0; k < samples_; ++k) {
-        in.value = in.source->sample(t - dt + (k + 1) * dt / samples_);
-        in.code = scale_.to_code(in.value);
+        if (varies || k == 0) {
+          in.value = in.source->sample(varies ? t - dt + (k + 1) * dt / samples_ : t);
+          in.code = scale_.to_code(in.value);
+        }
         raw_[i][2 * k] = static_cast<uint8_t>(in.code);
         raw_[i][2 * k + 1] = static_cast<uint8_t>(in.code >> 8);
       }
@@ -83,6 +89,7 @@ class AnalogInputDriver final : public CardDriver {
   AnalogScale scale_;
   unsigned samples_;
   std::vector<std::span<uint8_t>> raw_;
+  std::vector<EntrySlot> slots_;
 };
 
 class AnalogOutputDriver final : public CardDriver {

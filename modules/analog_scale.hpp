@@ -25,8 +25,10 @@ struct AnalogScale {
     const double v = std::clamp(volts, min_v, max_v);
     const double fs = full_scale();
     if (!(fs > 0.0) || std::isnan(v)) return 0;
-    const long code = std::lround(v * 32767.0 / fs);
-    return static_cast<uint16_t>(static_cast<int16_t>(std::clamp(code, -32767L, 32767L)));
+    // Round half away from zero (as lround, without the libm call on the cyclic path).
+    const double x = v * 32767.0 / fs;
+    const auto code = static_cast<int32_t>(x >= 0.0 ? x + 0.5 : x - 0.5);
+    return static_cast<uint16_t>(static_cast<int16_t>(std::clamp(code, -32767, 32767)));
   }
 
   double to_volts(uint16_t code) const {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "modules/drivers.hpp"
+#include "modules/entry_slot.hpp"
 #include "modules/safe_state.hpp"
 
 namespace rackcat::modules {
@@ -39,7 +40,8 @@ class DigitalInputDriver final : public CardDriver {
       : CardDriver(m, od, m.card->channels, 0),
         obj_(require_object(od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)),
         inverted_(m.card->signal == mdp::Signal::DigitalInInverted),
-        samples_(m.card->samples) {
+        samples_(m.card->samples),
+        word_(obj_, 1) {
     if (samples_ > 1) {
       raw_ = obj_.bytes(1);
       sample_bytes_ = card().channels > 8 ? 2 : 1;
@@ -52,13 +54,17 @@ class DigitalInputDriver final : public CardDriver {
     if (samples_ == 1) {
       const uint32_t word = sample_word(t);
       inputs_code(word);
-      obj_.set_u(1, word);
+      word_.set(word);
       return;
     }
     // Sample k of 0..7 at t - dt + (k+1) dt/8: sample 0 is the oldest, 7 is taken now.
+    // Channels whose sources cannot change within a cycle are sampled once.
+    bool varies = false;
+    for (const auto& in : inputs_) varies |= in.source->varies_within_cycle();
+    uint32_t word = 0;
     for (unsigned k = 0; k < samples_; ++k) {
       const double ts = t - dt + (k + 1) * dt / samples_;
-      const uint32_t word = sample_word(ts);
+      if (varies || k == 0) word = sample_word(varies ? ts : t);
       raw_[k * sample_bytes_] = static_cast<uint8_t>(word);
       if (sample_bytes_ == 2) raw_[k * sample_bytes_ + 1] = static_cast<uint8_t>(word >> 8);
       if (k + 1 == samples_) inputs_code(word);
@@ -94,6 +100,7 @@ class DigitalInputDriver final : public CardDriver {
   coe::Object& obj_;
   bool inverted_;
   unsigned samples_;
+  EntrySlot word_;  // DINx16 / DINx8 (DINx4 is a BIT4: set_u fallback)
   std::span<uint8_t> raw_;
   unsigned sample_bytes_ = 1;
 };

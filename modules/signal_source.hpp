@@ -27,6 +27,9 @@ class Source {
   virtual double sample(double t) = 0;
   // One line for `rackcat ctl list`, e.g. "sine amplitude=5 frequency=1 offset=0".
   virtual std::string describe() const = 0;
+  // False when the value can only change from one cycle to the next (constant, loopback,
+  // plant): oversampled cards then sample once per cycle instead of eight times.
+  virtual bool varies_within_cycle() const { return true; }
 };
 
 class ConstantSource final : public Source {
@@ -34,6 +37,7 @@ class ConstantSource final : public Source {
   explicit ConstantSource(double value) : value_(value) {}
   double sample(double) override { return value_; }
   std::string describe() const override;
+  bool varies_within_cycle() const override { return false; }
 
  private:
   double value_;
@@ -120,6 +124,7 @@ class LoopbackSource final : public Source {
                  double offset = 0.0);
   double sample(double) override { return gain_ * *output_ + offset_; }
   std::string describe() const override;
+  bool varies_within_cycle() const override { return false; }
 
  private:
   const double* output_;
@@ -133,6 +138,7 @@ class PlantSource final : public Source {
   PlantSource(const StateSpacePlant& plant, size_t index, std::string plant_name);
   double sample(double) override;
   std::string describe() const override;
+  bool varies_within_cycle() const override { return false; }
 
  private:
   const StateSpacePlant& plant_;

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "modules/drivers.hpp"
+#include "modules/entry_slot.hpp"
 #include "modules/rtd.hpp"
 #include "modules/temperature_scale.hpp"
 #include "modules/thermocouple.hpp"
@@ -30,21 +31,33 @@ class ThermocoupleDriver final : public CardDriver {
       : CardDriver(m, od, m.card->channels, 0),
         obj_(require_object(od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)),
         ohms_(m.card->thermocouple_ohms ? od.find(m.index(0x5000, 4)) : nullptr),
-        type_(tc_type(m.card->thermocouple_type)) {}
+        type_(tc_type(m.card->thermocouple_type)),
+        cache_(inputs_.size()) {
+    for (size_t i = 0; i < inputs_.size(); ++i) {
+      slots_.emplace_back(obj_, static_cast<uint8_t>(i + 1));
+      if (ohms_ != nullptr) ohm_slots_.emplace_back(*ohms_, static_cast<uint8_t>(i + 1));
+    }
+  }
 
   void write_inputs(double t, double) override {
     for (size_t i = 0; i < inputs_.size(); ++i) {
       InputChannel& in = inputs_[i];
       in.value = in.source->sample(t);
-      const TcMeasurement m = tc_measure(type_, in.value, cold_junction_c_, in.open);
-      const int16_t code = m.open_circuit ? kTempOpenCircuit : encode_temperature(m.temperature_c);
-      in.code = static_cast<uint16_t>(code);
-      const auto sub = static_cast<uint8_t>(i + 1);
-      obj_.set_u(sub, in.code);
+      // The conversion is a pure function of (temperature, cold junction, open): skip the
+      // polynomials while neither changed.
+      Cache& c = cache_[i];
+      if (!c.valid || c.value != in.value || c.open != in.open || c.cj != cold_junction_c_) {
+        const TcMeasurement m = tc_measure(type_, in.value, cold_junction_c_, in.open);
+        c.code = static_cast<uint16_t>(m.open_circuit ? kTempOpenCircuit
+                                                      : encode_temperature(m.temperature_c));
+        c = {true, in.open, in.value, cold_junction_c_, c.code};
+      }
+      in.code = c.code;
+      slots_[i].set(in.code);
       if (ohms_ != nullptr) {
         // 0x5nn4 "Ohms[n]" UINT in ohms; an open loop reads full scale.
         const double r = in.open ? 65535.0 : std::clamp(std::round(in.loop_ohms), 0.0, 65534.0);
-        ohms_->set_u(sub, static_cast<uint64_t>(r));
+        ohm_slots_[i].set(static_cast<uint32_t>(r));
       }
     }
   }
@@ -68,6 +81,14 @@ class ThermocoupleDriver final : public CardDriver {
   coe::Object& obj_;
   coe::Object* ohms_;
   TcType type_;
+  struct Cache {
+    bool valid = false;
+    bool open = false;
+    double value = 0.0, cj = 0.0;
+    uint16_t code = 0;
+  };
+  std::vector<Cache> cache_;
+  std::vector<EntrySlot> slots_, ohm_slots_;
   double cold_junction_c_ = 25.0;  // terminal block temperature
 };
 
@@ -75,7 +96,10 @@ class RtdDriver final : public CardDriver {
  public:
   RtdDriver(const mdp::Module& m, coe::ObjectDictionary& od)
       : CardDriver(m, od, m.card->channels, 0),
-        obj_(require_object(od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)) {}
+        obj_(require_object(od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)) {
+    for (size_t i = 0; i < inputs_.size(); ++i)
+      slots_.emplace_back(obj_, static_cast<uint8_t>(i + 1));
+  }
 
   void write_inputs(double t, double) override {
     for (size_t i = 0; i < inputs_.size(); ++i) {
@@ -87,7 +111,7 @@ class RtdDriver final : public CardDriver {
         code = encode_temperature(rtd_temperature(rtd_resistance(in.value)));
       }
       in.code = static_cast<uint16_t>(code);
-      obj_.set_u(static_cast<uint8_t>(i + 1), in.code);
+      slots_[i].set(in.code);
     }
   }
   void clear_inputs() override {
@@ -101,6 +125,7 @@ class RtdDriver final : public CardDriver {
 
  private:
   coe::Object& obj_;
+  std::vector<EntrySlot> slots_;
 };
 
 }  // namespace

@@ -69,6 +69,13 @@ UartDriver::UartDriver(const mdp::Module& m, coe::ObjectDictionary& od)
     tx_obj_[c] = od.find(m.index(0x5000, static_cast<uint8_t>(0x7 + c)));
     rx_obj_[c] = od.find(m.index(0x5000, static_cast<uint8_t>(0xB + c)));
   }
+  for (size_t c = 0; c < 4; ++c) {
+    status_slots_[c] = EntrySlot(status_pdo_, static_cast<uint8_t>(1 + c));
+    if (info_ != nullptr) {
+      info_status_[c] = EntrySlot(*info_, static_cast<uint8_t>(5 + c));
+      info_errors_[c] = EntrySlot(*info_, static_cast<uint8_t>(9 + c));
+    }
+  }
   read_config();
   install_hooks();
 }
@@ -209,11 +216,9 @@ uint16_t UartDriver::status_word(size_t c) const {
 void UartDriver::refresh_status_objects() {
   for (size_t c = 0; c < 4; ++c) {
     const uint16_t w = status_word(c);
-    status_pdo_.set_u(static_cast<uint8_t>(1 + c), w);
-    if (info_ != nullptr) {
-      info_->set_u(static_cast<uint8_t>(5 + c), w);
-      info_->set_u(static_cast<uint8_t>(9 + c), channels_[c]->errors.load());
-    }
+    status_slots_[c].set(w);
+    info_status_[c].set(w);
+    info_errors_[c].set(channels_[c]->errors.load(std::memory_order_relaxed));
   }
 }
 

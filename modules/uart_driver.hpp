@@ -36,6 +36,7 @@
 
 #include "modules/byte_ring.hpp"
 #include "modules/card_driver.hpp"
+#include "modules/entry_slot.hpp"
 
 namespace rackcat::modules {
 
@@ -126,6 +127,7 @@ class UartDriver final : public CardDriver {
   coe::Object* info_;        // 0x5nn6
   std::array<coe::Object*, 4> tx_obj_{};
   std::array<coe::Object*, 4> rx_obj_{};
+  std::array<EntrySlot, 4> status_slots_, info_status_, info_errors_;
   std::thread thread_;
   std::atomic<bool> running_{false};
   int wake_fd_ = -1;

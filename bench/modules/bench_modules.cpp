@@ -1,0 +1,100 @@
+// The application cycle of the default rack (examples/default-rack.yaml: 27 modules, every
+// card kind, sine/ramp/noise/constant and loopback sources) plus a state-space plant, in
+// process. Target: < 5 µs per cycle (docs/PERFORMANCE.md "## modules").
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+#include <vector>
+
+#include "mdp/device.hpp"
+#include "mdp/rack_config.hpp"
+#include "modules/analog_scale.hpp"
+#include "modules/rack.hpp"
+#include "modules/rtd.hpp"
+#include "modules/thermocouple.hpp"
+
+using namespace rackcat;
+using namespace rackcat::modules;
+
+namespace {
+
+struct Setup {
+  double clock = 0.0;
+  mdp::Device device;
+  Rack rack;
+  std::vector<uint8_t> sm2, sm3;
+
+  Setup()
+      : device(mdp::default_rack(), options()), rack(device, rack_options(&clock)) {
+    const uint16_t tc = rack.driver_at(1, 15)->module().number;
+    rack.set_source(tc, 0, "plant",
+                    {{"plant", "oven"}, {"a", "-0.1"}, {"b", "5"}, {"c", "1"},
+                     {"inputs", "1.11.0"}});
+    device.state_changed(coe::EsmState::Init, coe::EsmState::PreOp);
+    device.state_changed(coe::EsmState::PreOp, coe::EsmState::SafeOp);
+    device.state_changed(coe::EsmState::SafeOp, coe::EsmState::Op);
+    sm2.assign(device.output_bytes(), 0x55);
+    sm3.assign(device.input_bytes(), 0);
+  }
+  static mdp::DeviceOptions options() {
+    mdp::DeviceOptions o;
+    o.state_dir = (std::filesystem::temp_directory_path() / "rackcat-bench-modules").string();
+    o.load_stored_parameters = false;
+    return o;
+  }
+  static RackOptions rack_options(double* clock) {
+    RackOptions o;
+    o.clock = [clock] { return *clock; };
+    return o;
+  }
+};
+
+// The modules' share of a cycle: every driver reads its outputs and refreshes its inputs,
+// sources and the plant advance, wiring faults and the exception tree are evaluated.
+void BM_RackCycle(benchmark::State& state) {
+  Setup s;
+  for (auto _ : state) {
+    s.clock += 0.001;
+    s.rack.on_outputs(s.device);
+    s.rack.before_inputs(s.device);
+  }
+  state.counters["modules"] = static_cast<double>(s.device.modules().size());
+}
+BENCHMARK(BM_RackCycle);
+
+// The full application cycle as the ESC runs it: SM2 unpacked into the 0x7nnX objects, the
+// drivers, then the 0x6nnX objects packed into SM3 (mdp process image included).
+void BM_DeviceCycle(benchmark::State& state) {
+  Setup s;
+  for (auto _ : state) {
+    s.clock += 0.001;
+    s.device.write_outputs(s.sm2);
+    s.device.read_inputs(s.sm3);
+    benchmark::DoNotOptimize(s.sm3.data());
+  }
+  state.counters["sm2_bytes"] = static_cast<double>(s.sm2.size());
+  state.counters["sm3_bytes"] = static_cast<double>(s.sm3.size());
+}
+BENCHMARK(BM_DeviceCycle);
+
+void BM_ThermocoupleChannel(benchmark::State& state) {
+  double t = 20.0;
+  for (auto _ : state) {
+    t = t > 1300.0 ? 20.0 : t + 0.37;
+    benchmark::DoNotOptimize(tc_measure(TcType::K, t, 25.0, false));
+  }
+}
+BENCHMARK(BM_ThermocoupleChannel);
+
+void BM_RtdChannel(benchmark::State& state) {
+  double t = -150.0;
+  for (auto _ : state) {
+    t = t > 800.0 ? -150.0 : t + 0.37;
+    benchmark::DoNotOptimize(rtd_temperature(rtd_resistance(t)));
+  }
+}
+BENCHMARK(BM_RtdChannel);
+
+}  // namespace
+
+BENCHMARK_MAIN();
