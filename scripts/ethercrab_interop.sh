@@ -115,6 +115,8 @@ for n in $sizes; do
     ip netns exec "$ns" sysctl -qw "net.ipv6.conf.$i.disable_ipv6=1" || true
     ip -n "$ns" link set "$i" up
   done
+  # the slave's control API (rackcat run) listens on 127.0.0.1 inside the namespace
+  ip -n "$ns" link set lo up
 
   slave_log="$logdir/slave-$n.log"
   master_log="$logdir/ethercrab-$n.log"
