@@ -18,7 +18,6 @@ Everything here needs root (netns, veth, raw sockets); the tests skip with a mes
 """
 import itertools
 import os
-import re
 import select
 import shlex
 import shutil
