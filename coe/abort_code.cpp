@@ -53,8 +53,11 @@ constexpr std::array<AbortText, 30> kAbortTexts{{
 }  // namespace
 
 std::string_view describe(AbortCode code) {
-  for (const auto& a : kAbortTexts)
-    if (a.code == code) return a.text;
+  for (const auto& a : kAbortTexts) {
+    if (a.code == code) {
+      return a.text;
+    }
+  }
   return "Unknown SDO abort code";
 }
 

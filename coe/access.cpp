@@ -41,20 +41,30 @@ std::optional<uint16_t> from_guide(std::string_view text) {
   char buf[32];
   size_t n = 0;
   for (char c : text) {
-    if (c == ' ' || c == '\t') continue;
-    if (n == sizeof buf) return std::nullopt;
+    if (c == ' ' || c == '\t') {
+      continue;
+    }
+    if (n == sizeof buf) {
+      return std::nullopt;
+    }
     buf[n++] = (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
   }
   const std::string_view norm(buf, n);
-  for (const auto& g : kGuide)
-    if (g.text == norm) return g.bits;
+  for (const auto& g : kGuide) {
+    if (g.text == norm) {
+      return g.bits;
+    }
+  }
   return std::nullopt;
 }
 
 std::string_view to_guide(uint16_t bits) {
   const uint16_t rw = bits & (kReadAll | kWriteAll);
-  for (const auto& g : kGuide)
-    if (g.bits == rw) return g.text;
+  for (const auto& g : kGuide) {
+    if (g.bits == rw) {
+      return g.text;
+    }
+  }
   return {};
 }
 

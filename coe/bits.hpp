@@ -23,23 +23,31 @@ inline void put_le16(uint8_t* p, uint16_t v) {
   p[1] = static_cast<uint8_t>(v >> 8);
 }
 inline void put_le32(uint8_t* p, uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<uint8_t>(v >> (8 * i));
+  for (int i = 0; i < 4; ++i) {
+    p[i] = static_cast<uint8_t>(v >> (8 * i));
+  }
 }
 // Reads up to 8 little-endian bytes.
 inline uint64_t get_le(const uint8_t* p, size_t n) {
   uint64_t v = 0;
-  for (size_t i = 0; i < n && i < 8; ++i) v |= static_cast<uint64_t>(p[i]) << (8 * i);
+  for (size_t i = 0; i < n && i < 8; ++i) {
+    v |= static_cast<uint64_t>(p[i]) << (8 * i);
+  }
   return v;
 }
 inline void put_le(uint8_t* p, size_t n, uint64_t v) {
-  for (size_t i = 0; i < n; ++i) p[i] = i < 8 ? static_cast<uint8_t>(v >> (8 * i)) : 0;
+  for (size_t i = 0; i < n; ++i) {
+    p[i] = i < 8 ? static_cast<uint8_t>(v >> (8 * i)) : 0;
+  }
 }
 
 // Copies `nbits` bits from src (starting at bit src_bit) to dst (starting at bit dst_bit);
 // bits of dst outside the range keep their value. Byte-aligned runs become one memcpy.
 inline void copy_bits(uint8_t* dst, size_t dst_bit, const uint8_t* src, size_t src_bit,
                       size_t nbits) {
-  if (nbits == 0) return;
+  if (nbits == 0) {
+    return;
+  }
   if ((dst_bit % 8) == 0 && (src_bit % 8) == 0) {
     const size_t whole = nbits / 8;
     std::memcpy(dst + dst_bit / 8, src + src_bit / 8, whole);

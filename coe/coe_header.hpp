@@ -31,12 +31,16 @@ struct CoeHeader {
   uint8_t service = 0;  // 4 bits, a CoeService value
 
   bool encode(std::span<uint8_t> out) const {
-    if (out.size() < kSize) return false;
+    if (out.size() < kSize) {
+      return false;
+    }
     put_le16(out.data(), static_cast<uint16_t>((number & 0x01FF) | ((service & 0x0F) << 12)));
     return true;
   }
   static std::optional<CoeHeader> decode(std::span<const uint8_t> in) {
-    if (in.size() < kSize) return std::nullopt;
+    if (in.size() < kSize) {
+      return std::nullopt;
+    }
     const uint16_t w = get_le16(in.data());
     return CoeHeader{static_cast<uint16_t>(w & 0x01FF), static_cast<uint8_t>(w >> 12)};
   }

@@ -18,8 +18,11 @@ size_t entry_bits(const Object& obj, const Entry& e) {
 }
 
 bool bits_equal(const uint8_t* a, const uint8_t* b, size_t bit_offset, size_t bits) {
-  for (size_t i = bit_offset; i < bit_offset + bits; ++i)
-    if (((a[i / 8] ^ b[i / 8]) >> (i % 8)) & 1u) return false;
+  for (size_t i = bit_offset; i < bit_offset + bits; ++i) {
+    if (((a[i / 8] ^ b[i / 8]) >> (i % 8)) & 1u) {
+      return false;
+    }
+  }
   return true;
 }
 
@@ -40,21 +43,37 @@ void ca_extract(const Object& obj, uint8_t first, uint8_t last, uint8_t* out) {
   const size_t begin = ca_begin_bit(first);
   const uint8_t* image = obj.image().data();
   for (const Entry& e : obj.entries()) {
-    if (e.subindex < first || e.padding) continue;
-    if (e.subindex > last) break;
+    if (e.subindex < first || e.padding) {
+      continue;
+    }
+    if (e.subindex > last) {
+      break;
+    }
     copy_bits(out, e.bit_offset - begin, image, e.bit_offset, entry_bits(obj, e));
   }
 }
 
 AbortCode SdoServer::read_complete(Object& obj, uint8_t subindex, EsmState state, size_t& bytes) {
-  if (obj.code() == ObjectCode::Var) return AbortCode::CompleteAccessUnsupported;
-  if (subindex > 1) return AbortCode::UnsupportedAccess;
-  if (obj.hooks.before_read) obj.hooks.before_read(obj, -1);
+  if (obj.code() == ObjectCode::Var) {
+    return AbortCode::CompleteAccessUnsupported;
+  }
+  if (subindex > 1) {
+    return AbortCode::UnsupportedAccess;
+  }
+  if (obj.hooks.before_read) {
+    obj.hooks.before_read(obj, -1);
+  }
   const uint8_t last = ca_last_subindex(obj);
   for (const Entry& e : obj.entries()) {
-    if (e.subindex < subindex || e.padding) continue;
-    if (e.subindex > last) break;
-    if (AbortCode rc = check_read_access(e.access, state); rc != AbortCode::None) return rc;
+    if (e.subindex < subindex || e.padding) {
+      continue;
+    }
+    if (e.subindex > last) {
+      break;
+    }
+    if (AbortCode rc = check_read_access(e.access, state); rc != AbortCode::None) {
+      return rc;
+    }
   }
   bytes = ca_bytes(obj, subindex, last);
   return AbortCode::None;
@@ -62,49 +81,75 @@ AbortCode SdoServer::read_complete(Object& obj, uint8_t subindex, EsmState state
 
 AbortCode SdoServer::write_complete(Object& obj, uint8_t subindex, std::span<const uint8_t> data,
                                     EsmState state) {
-  if (obj.code() == ObjectCode::Var) return AbortCode::CompleteAccessUnsupported;
-  if (subindex > 1) return AbortCode::UnsupportedAccess;
+  if (obj.code() == ObjectCode::Var) {
+    return AbortCode::CompleteAccessUnsupported;
+  }
+  if (subindex > 1) {
+    return AbortCode::UnsupportedAccess;
+  }
   const auto image = obj.image();
   // The candidate image lives in a buffer sized at start-up (prepare()).
-  if (image.size() > scratch_.size()) return AbortCode::OutOfMemory;
+  if (image.size() > scratch_.size()) {
+    return AbortCode::OutOfMemory;
+  }
   const uint8_t max_sub = obj.max_subindex();
   uint8_t last = ca_last_subindex(obj);
   if (subindex == 0) {
-    if (data.empty()) return AbortCode::LengthTooLow;
+    if (data.empty()) {
+      return AbortCode::LengthTooLow;
+    }
     // The written subindex 0 says how many entries follow.
-    if (data[0] > max_sub) return AbortCode::ValueTooHigh;
+    if (data[0] > max_sub) {
+      return AbortCode::ValueTooHigh;
+    }
     last = data[0];
   }
   // Enough data for every entry in use, and no more than the whole object.
-  if (data.size() < ca_bytes(obj, subindex, last)) return AbortCode::LengthTooLow;
-  if (data.size() > ca_bytes(obj, subindex, max_sub)) return AbortCode::LengthTooHigh;
+  if (data.size() < ca_bytes(obj, subindex, last)) {
+    return AbortCode::LengthTooLow;
+  }
+  if (data.size() > ca_bytes(obj, subindex, max_sub)) {
+    return AbortCode::LengthTooHigh;
+  }
 
   const size_t begin = ca_begin_bit(subindex);
   uint8_t* cand = scratch_.data();
   std::memcpy(cand, image.data(), image.size());
   for (const Entry& e : obj.entries()) {
-    if (e.subindex < subindex || e.padding) continue;
-    if (e.subindex > last) break;
+    if (e.subindex < subindex || e.padding) {
+      continue;
+    }
+    if (e.subindex > last) {
+      break;
+    }
     const size_t bits = entry_bits(obj, e);
     copy_bits(cand, e.bit_offset, data.data(), e.bit_offset - begin, bits);
     // An entry written with its current value passes even where it is read-only: masters
     // write back a whole record they read (e.g. 0x1C12 with its read-only subindex 0).
-    if (bits_equal(cand, image.data(), e.bit_offset, bits)) continue;
-    if (AbortCode rc = check_write_access(e.access, state); rc != AbortCode::None) return rc;
+    if (bits_equal(cand, image.data(), e.bit_offset, bits)) {
+      continue;
+    }
+    if (AbortCode rc = check_write_access(e.access, state); rc != AbortCode::None) {
+      return rc;
+    }
     uint8_t* value = value_.data();
     std::memset(value, 0, e.byte_length());
     copy_bits(value, 0, cand, e.bit_offset, bits);
     if (AbortCode rc = check_value(od_, obj, e, {value, e.byte_length()}, {cand, image.size()});
-        rc != AbortCode::None)
+        rc != AbortCode::None) {
       return rc;
+    }
   }
   if (obj.hooks.validate_write) {
     if (AbortCode rc = obj.hooks.validate_write(obj, -1, {cand, image.size()}, state);
-        rc != AbortCode::None)
+        rc != AbortCode::None) {
       return rc;
+    }
   }
   std::memcpy(image.data(), cand, image.size());
-  if (obj.hooks.after_write) obj.hooks.after_write(obj, -1);
+  if (obj.hooks.after_write) {
+    obj.hooks.after_write(obj, -1);
+  }
   return AbortCode::None;
 }
 

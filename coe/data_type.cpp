@@ -42,8 +42,11 @@ constexpr std::array<TypeInfo, 24> kTypes{{
 }};
 
 const TypeInfo* info(DataType t) {
-  for (const auto& i : kTypes)
-    if (i.type == t) return &i;
+  for (const auto& i : kTypes) {
+    if (i.type == t) {
+      return &i;
+    }
+  }
   return nullptr;
 }
 
@@ -51,7 +54,9 @@ const TypeInfo* info(DataType t) {
 
 std::optional<uint16_t> fixed_bit_size(DataType t) {
   const TypeInfo* i = info(t);
-  if (!i || i->bits == 0) return std::nullopt;
+  if (!i || i->bits == 0) {
+    return std::nullopt;
+  }
   return i->bits;
 }
 

@@ -37,7 +37,9 @@ class EmergencyQueue {
   // Consumer side.
   bool pop(Emergency& out) {
     const size_t head = head_.load(std::memory_order_relaxed);
-    if (head == tail_.load(std::memory_order_acquire)) return false;
+    if (head == tail_.load(std::memory_order_acquire)) {
+      return false;
+    }
     out = slots_[head % N];
     head_.store(head + 1, std::memory_order_release);
     return true;

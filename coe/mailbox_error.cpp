@@ -28,15 +28,20 @@ constexpr std::array<ErrorText, 8> kTexts{{
 }  // namespace
 
 std::string_view describe(MailboxError error) {
-  for (const auto& t : kTexts)
-    if (t.error == error) return t.text;
+  for (const auto& t : kTexts) {
+    if (t.error == error) {
+      return t.text;
+    }
+  }
   return "Unknown mailbox error";
 }
 
 size_t write_mailbox_error(std::span<uint8_t> out, MailboxError error, uint16_t address,
                            uint8_t counter) {
   constexpr size_t kTotal = MailboxHeader::kSize + kMailboxErrorLength;
-  if (out.size() < kTotal) return 0;
+  if (out.size() < kTotal) {
+    return 0;
+  }
   MailboxHeader h;
   h.length = kMailboxErrorLength;
   h.address = address;

@@ -5,7 +5,9 @@
 namespace rackcat::coe {
 
 bool MailboxHeader::encode(std::span<uint8_t> out) const {
-  if (out.size() < kSize) return false;
+  if (out.size() < kSize) {
+    return false;
+  }
   put_le16(&out[0], length);
   put_le16(&out[2], address);
   out[4] = static_cast<uint8_t>((channel & 0x3F) | ((priority & 0x03) << 6));
@@ -14,7 +16,9 @@ bool MailboxHeader::encode(std::span<uint8_t> out) const {
 }
 
 std::optional<MailboxHeader> MailboxHeader::decode(std::span<const uint8_t> in) {
-  if (in.size() < kSize) return std::nullopt;
+  if (in.size() < kSize) {
+    return std::nullopt;
+  }
   MailboxHeader h;
   h.length = get_le16(&in[0]);
   h.address = get_le16(&in[2]);

@@ -13,8 +13,9 @@ Object::Object(uint16_t index, ObjectCode code, std::string name, uint16_t data_
     : index_(index), code_(code), name_(std::move(name)), data_type_(data_type) {}
 
 Entry& Object::add(Entry e) {
-  if (!entries_.empty() && e.subindex <= entries_.back().subindex)
+  if (!entries_.empty() && e.subindex <= entries_.back().subindex) {
     throw std::logic_error("object " + std::to_string(index_) + ": subindex out of order");
+  }
   if (e.bit_length == 0) {
     if (auto bits = fixed_bit_size(e.type())) {
       e.bit_length = *bits;
@@ -28,8 +29,9 @@ Entry& Object::add(Entry e) {
   const bool sub0_slot = code_ != ObjectCode::Var && e.subindex == 0;
   if (entries_.empty() || e.bit_offset == 0) {
     uint16_t pos = entries_.empty() ? e.bit_offset : next_bit_;
-    if (!packed_ && e.bit_length >= 8 && (pos % 8) != 0)
+    if (!packed_ && e.bit_length >= 8 && (pos % 8) != 0) {
       pos = static_cast<uint16_t>(pos + 8 - pos % 8);
+    }
     e.bit_offset = pos;
   } else if (e.bit_offset < next_bit_) {
     throw std::logic_error("object " + std::to_string(index_) + ": overlapping bit offset");
@@ -48,20 +50,26 @@ void Object::finalize() {
 void Object::load_defaults() {
   std::fill(image_.begin(), image_.end(), 0);
   for (const Entry& e : entries_) {
-    if (e.default_value.empty()) continue;
+    if (e.default_value.empty()) {
+      continue;
+    }
     const size_t bits = std::min<size_t>(e.bit_length, e.default_value.size() * 8);
-    if (e.bit_offset + bits > image_.size() * 8) continue;
+    if (e.bit_offset + bits > image_.size() * 8) {
+      continue;
+    }
     copy_bits(image_.data(), e.bit_offset, e.default_value.data(), 0, bits);
   }
   // An ARRAY/RECORD without a default for subindex 0 starts with all entries in use.
   if (code_ != ObjectCode::Var && !entries_.empty() && entries_.front().subindex == 0 &&
-      entries_.front().default_value.empty() && !image_.empty())
+      entries_.front().default_value.empty() && !image_.empty()) {
     image_[0] = max_subindex();
+  }
 }
 
 const Entry* Object::entry(uint8_t subindex) const {
-  if (subindex < entries_.size() && entries_[subindex].subindex == subindex)
+  if (subindex < entries_.size() && entries_[subindex].subindex == subindex) {
     return &entries_[subindex];
+  }
   auto it = std::lower_bound(entries_.begin(), entries_.end(), subindex,
                              [](const Entry& e, uint8_t s) { return e.subindex < s; });
   return (it != entries_.end() && it->subindex == subindex) ? &*it : nullptr;
@@ -72,14 +80,18 @@ uint8_t Object::max_subindex() const {
 }
 
 uint8_t Object::sub0() const {
-  if (code_ == ObjectCode::Var || image_.empty()) return 0;
+  if (code_ == ObjectCode::Var || image_.empty()) {
+    return 0;
+  }
   return image_[0];
 }
 
 size_t Object::ca_end_bit(uint8_t last) const {
   size_t end = 0;
   for (const Entry& e : entries_) {
-    if (e.subindex > last) break;
+    if (e.subindex > last) {
+      break;
+    }
     const bool sub0_slot = code_ != ObjectCode::Var && e.subindex == 0;
     end = std::max<size_t>(end, e.bit_offset + (sub0_slot ? 16u : e.bit_length));
   }
@@ -88,9 +100,13 @@ size_t Object::ca_end_bit(uint8_t last) const {
 
 std::span<uint8_t> Object::bytes(uint8_t subindex) {
   const Entry* e = entry(subindex);
-  if (!e) return {};
+  if (!e) {
+    return {};
+  }
   const size_t first = e->bit_offset / 8;
-  if (first >= image_.size()) return {};
+  if (first >= image_.size()) {
+    return {};
+  }
   const size_t len = std::min<size_t>(e->byte_length(), image_.size() - first);
   return std::span<uint8_t>(image_).subspan(first, len);
 }
@@ -101,31 +117,43 @@ std::span<const uint8_t> Object::bytes(uint8_t subindex) const {
 
 uint64_t Object::get_u(uint8_t subindex) const {
   const Entry* e = entry(subindex);
-  if (!e) return 0;
+  if (!e) {
+    return 0;
+  }
   uint8_t tmp[8] = {};
   const size_t bits = std::min<size_t>(e->bit_length, 64);
-  if (e->bit_offset + bits > image_.size() * 8) return 0;
+  if (e->bit_offset + bits > image_.size() * 8) {
+    return 0;
+  }
   copy_bits(tmp, 0, image_.data(), e->bit_offset, bits);
   return get_le(tmp, 8);
 }
 
 int64_t Object::get_i(uint8_t subindex) const {
   const Entry* e = entry(subindex);
-  if (!e) return 0;
+  if (!e) {
+    return 0;
+  }
   const uint64_t u = get_u(subindex);
   const unsigned bits = std::min<unsigned>(e->bit_length, 64);
-  if (bits == 64 || bits == 0) return static_cast<int64_t>(u);
+  if (bits == 64 || bits == 0) {
+    return static_cast<int64_t>(u);
+  }
   const uint64_t sign = uint64_t{1} << (bits - 1);
   return static_cast<int64_t>((u ^ sign) - sign);
 }
 
 void Object::set_u(uint8_t subindex, uint64_t value) {
   const Entry* e = entry(subindex);
-  if (!e) return;
+  if (!e) {
+    return;
+  }
   uint8_t tmp[8];
   put_le(tmp, 8, value);
   const size_t bits = std::min<size_t>(e->bit_length, 64);
-  if (e->bit_offset + bits > image_.size() * 8) return;
+  if (e->bit_offset + bits > image_.size() * 8) {
+    return;
+  }
   copy_bits(image_.data(), e->bit_offset, tmp, 0, bits);
 }
 
@@ -156,10 +184,13 @@ ObjectDictionary& ObjectDictionary::operator=(const ObjectDictionary& other) {
 }
 
 Object& ObjectDictionary::add(Object object) {
-  if (objects_.count(object.index()))
+  if (objects_.count(object.index())) {
     throw std::logic_error("object dictionary: index added twice: " +
                            std::to_string(object.index()));
-  if (object.image().size() < (object.ca_end_bit(255) + 7) / 8) object.finalize();
+  }
+  if (object.image().size() < (object.ca_end_bit(255) + 7) / 8) {
+    object.finalize();
+  }
   const uint16_t index = object.index();
   auto [it, inserted] = objects_.emplace(index, std::move(object));
   (void)inserted;
@@ -173,7 +204,9 @@ void ObjectDictionary::add_enum(EnumType type) {
 }
 
 bool ObjectDictionary::remove(uint16_t index) {
-  if (!objects_.erase(index)) return false;
+  if (!objects_.erase(index)) {
+    return false;
+  }
   rebuild_index();
   return true;
 }
@@ -209,7 +242,9 @@ const EnumType* ObjectDictionary::find_enum(uint16_t index) const {
 
 size_t ObjectDictionary::max_image_bytes() const {
   size_t m = 0;
-  for (const Object* o : sorted_) m = std::max(m, o->image().size());
+  for (const Object* o : sorted_) {
+    m = std::max(m, o->image().size());
+  }
   return m;
 }
 

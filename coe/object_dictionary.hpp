@@ -183,11 +183,15 @@ class ObjectDictionary {
   // Objects in index order (for SDO Information lists, the `od` command and the ESI).
   template <class F>
   void for_each(F&& f) const {
-    for (const auto& [index, obj] : objects_) f(obj);
+    for (const auto& [index, obj] : objects_) {
+      f(obj);
+    }
   }
   template <class F>
   void for_each(F&& f) {
-    for (auto& [index, obj] : objects_) f(obj);
+    for (auto& [index, obj] : objects_) {
+      f(obj);
+    }
   }
   size_t size() const { return objects_.size(); }
   const std::map<uint16_t, EnumType>& enums() const { return enums_; }

@@ -8,7 +8,9 @@ namespace {
 // Value of entry `sub` read from `image` (the object's current or candidate image).
 uint64_t entry_value(const Object& obj, uint8_t sub, std::span<const uint8_t> image) {
   const Entry* e = obj.entry(sub);
-  if (!e || e->bit_offset + e->bit_length > image.size() * 8) return 0;
+  if (!e || e->bit_offset + e->bit_length > image.size() * 8) {
+    return 0;
+  }
   uint8_t tmp[8] = {};
   copy_bits(tmp, 0, image.data(), e->bit_offset, std::min<size_t>(e->bit_length, 64));
   return get_le(tmp, 8);
@@ -18,12 +20,15 @@ uint64_t entry_value(const Object& obj, uint8_t sub, std::span<const uint8_t> im
 // candidate image). Uses `buf` as storage; returns the candidate.
 std::span<const uint8_t> candidate(const Object& obj, int sub, std::span<const uint8_t> data,
                                    std::span<uint8_t> buf) {
-  if (sub < 0) return data;
+  if (sub < 0) {
+    return data;
+  }
   const auto img = obj.image();
   std::copy(img.begin(), img.end(), buf.begin());
-  if (const Entry* e = obj.entry(static_cast<uint8_t>(sub)))
+  if (const Entry* e = obj.entry(static_cast<uint8_t>(sub))) {
     copy_bits(buf.data(), e->bit_offset, data.data(), 0,
               std::min<size_t>(e->bit_length, data.size() * 8));
+  }
   return buf.first(img.size());
 }
 
@@ -41,16 +46,30 @@ bool is_mapping_index(uint16_t index, PdoDirection dir) {
 AbortCode check_mapping_entry(const ObjectDictionary& od, uint32_t value, PdoDirection dir,
                               const Entry** target) {
   const MappingEntry m = MappingEntry::decode(value);
-  if (target) *target = nullptr;
-  if (m.is_padding()) return m.bits ? AbortCode::None : AbortCode::ParameterIncompatible;
+  if (target) {
+    *target = nullptr;
+  }
+  if (m.is_padding()) {
+    return m.bits ? AbortCode::None : AbortCode::ParameterIncompatible;
+  }
   const Object* obj = od.find(m.index);
-  if (!obj) return AbortCode::ObjectNotFound;
+  if (!obj) {
+    return AbortCode::ObjectNotFound;
+  }
   const Entry* e = obj->entry(m.subindex);
-  if (!e || e->padding) return AbortCode::SubindexNotFound;
+  if (!e || e->padding) {
+    return AbortCode::SubindexNotFound;
+  }
   const uint16_t flag = dir == PdoDirection::Rx ? access::kRxPdoMappable : access::kTxPdoMappable;
-  if (!(e->access & flag)) return AbortCode::NotMappable;
-  if (e->bit_length != m.bits) return AbortCode::ParameterIncompatible;
-  if (target) *target = e;
+  if (!(e->access & flag)) {
+    return AbortCode::NotMappable;
+  }
+  if (e->bit_length != m.bits) {
+    return AbortCode::ParameterIncompatible;
+  }
+  if (target) {
+    *target = e;
+  }
   return AbortCode::None;
 }
 
@@ -60,7 +79,9 @@ size_t mapping_bits(const ObjectDictionary& od, const Object& mapping, PdoDirect
   rc = AbortCode::None;
   for (uint8_t i = 1; i <= mapping.sub0() && i <= mapping.max_subindex(); ++i) {
     const uint32_t v = static_cast<uint32_t>(mapping.get_u(i));
-    if ((rc = check_mapping_entry(od, v, dir)) != AbortCode::None) return 0;
+    if ((rc = check_mapping_entry(od, v, dir)) != AbortCode::None) {
+      return 0;
+    }
     bits += v & 0xFF;
   }
   return bits;
@@ -71,16 +92,21 @@ WriteValidator pdo_mapping_validator(const ObjectDictionary& od, PdoDirection di
   return
       [&od, dir, max_bytes](const Object& obj, int sub, std::span<const uint8_t> data, EsmState) {
         // CiA 301 / ETG.1000.6: entries change only while subindex 0 is 0.
-        if (sub >= 1 && obj.sub0() != 0) return AbortCode::SubindexZeroNotZero;
-        if (sub >= 1)
+        if (sub >= 1 && obj.sub0() != 0) {
+          return AbortCode::SubindexZeroNotZero;
+        }
+        if (sub >= 1) {
           return check_mapping_entry(od, static_cast<uint32_t>(get_le(data.data(), 4)), dir);
+        }
         uint8_t buf[2 + 255 * 4];
         const auto img = candidate(obj, sub, data, {buf, sizeof buf});
         const uint8_t n = img.empty() ? 0 : img[0];
         size_t bits = 0;
         for (uint8_t i = 1; i <= n; ++i) {
           const uint32_t v = static_cast<uint32_t>(entry_value(obj, i, img));
-          if (AbortCode rc = check_mapping_entry(od, v, dir); rc != AbortCode::None) return rc;
+          if (AbortCode rc = check_mapping_entry(od, v, dir); rc != AbortCode::None) {
+            return rc;
+          }
           bits += v & 0xFF;
         }
         return bits > max_bytes * 8 ? AbortCode::PdoLengthExceeded : AbortCode::None;
@@ -91,7 +117,9 @@ WriteValidator pdo_assign_validator(const ObjectDictionary& od, PdoDirection dir
                                     size_t max_bytes) {
   return
       [&od, dir, max_bytes](const Object& obj, int sub, std::span<const uint8_t> data, EsmState) {
-        if (sub >= 1 && obj.sub0() != 0) return AbortCode::SubindexZeroNotZero;
+        if (sub >= 1 && obj.sub0() != 0) {
+          return AbortCode::SubindexZeroNotZero;
+        }
         uint8_t buf[2 + 255 * 2];
         const auto img = candidate(obj, sub, data, {buf, sizeof buf});
         const uint8_t first = sub >= 1 ? static_cast<uint8_t>(sub) : 1;
@@ -99,12 +127,18 @@ WriteValidator pdo_assign_validator(const ObjectDictionary& od, PdoDirection dir
         size_t bits = 0;
         for (uint8_t i = first; i <= last && i >= first; ++i) {
           const uint16_t index = static_cast<uint16_t>(entry_value(obj, i, img));
-          if (!is_mapping_index(index, dir)) return AbortCode::ParameterIncompatible;
+          if (!is_mapping_index(index, dir)) {
+            return AbortCode::ParameterIncompatible;
+          }
           const Object* mapping = od.find(index);
-          if (!mapping) return AbortCode::ObjectNotFound;
+          if (!mapping) {
+            return AbortCode::ObjectNotFound;
+          }
           AbortCode rc;
           bits += mapping_bits(od, *mapping, dir, rc);
-          if (rc != AbortCode::None) return rc;
+          if (rc != AbortCode::None) {
+            return rc;
+          }
         }
         return bits > max_bytes * 8 ? AbortCode::PdoLengthExceeded : AbortCode::None;
       };

@@ -10,17 +10,24 @@ namespace rackcat::coe {
 AbortCode ProcessImage::compile_direction(PdoDirection dir, Direction& out) {
   const uint16_t assign_index = dir == PdoDirection::Rx ? kRxPdoAssign : kTxPdoAssign;
   const Object* assign = od_.find(assign_index);
-  if (!assign) return AbortCode::None;  // no assignment object: no process data this way
+  if (!assign) {
+    return AbortCode::None;  // no assignment object: no process data this way
+  }
   for (uint8_t i = 1; i <= assign->sub0() && i <= assign->max_subindex(); ++i) {
     const uint16_t mapping_index = static_cast<uint16_t>(assign->get_u(i));
-    if (!is_mapping_index(mapping_index, dir)) return AbortCode::ParameterIncompatible;
+    if (!is_mapping_index(mapping_index, dir)) {
+      return AbortCode::ParameterIncompatible;
+    }
     const Object* mapping = od_.find(mapping_index);
-    if (!mapping) return AbortCode::ObjectNotFound;
+    if (!mapping) {
+      return AbortCode::ObjectNotFound;
+    }
     for (uint8_t j = 1; j <= mapping->sub0() && j <= mapping->max_subindex(); ++j) {
       const uint32_t value = static_cast<uint32_t>(mapping->get_u(j));
       const Entry* target = nullptr;
-      if (AbortCode rc = check_mapping_entry(od_, value, dir, &target); rc != AbortCode::None)
+      if (AbortCode rc = check_mapping_entry(od_, value, dir, &target); rc != AbortCode::None) {
         return rc;
+      }
       const MappingEntry m = MappingEntry::decode(value);
       if (target) {
         Object* obj = od_.find(m.index);
@@ -40,8 +47,9 @@ AbortCode ProcessImage::compile_direction(PdoDirection dir, Direction& out) {
             Copy{image, target->bit_offset, static_cast<uint32_t>(out.bits), m.bits});
         const bool hooked = dir == PdoDirection::Rx ? static_cast<bool>(obj->hooks.after_write)
                                                     : static_cast<bool>(obj->hooks.before_read);
-        if (hooked && std::find(out.hooked.begin(), out.hooked.end(), obj) == out.hooked.end())
+        if (hooked && std::find(out.hooked.begin(), out.hooked.end(), obj) == out.hooked.end()) {
           out.hooked.push_back(obj);
+        }
       }
       out.bits += m.bits;
     }
@@ -51,8 +59,12 @@ AbortCode ProcessImage::compile_direction(PdoDirection dir, Direction& out) {
 
 AbortCode ProcessImage::compile() {
   Direction rx, tx;
-  if (AbortCode rc = compile_direction(PdoDirection::Rx, rx); rc != AbortCode::None) return rc;
-  if (AbortCode rc = compile_direction(PdoDirection::Tx, tx); rc != AbortCode::None) return rc;
+  if (AbortCode rc = compile_direction(PdoDirection::Rx, rx); rc != AbortCode::None) {
+    return rc;
+  }
+  if (AbortCode rc = compile_direction(PdoDirection::Tx, tx); rc != AbortCode::None) {
+    return rc;
+  }
   outputs_ = std::move(rx.copies);
   output_hooks_ = std::move(rx.hooked);
   output_bits_ = rx.bits;
@@ -65,18 +77,26 @@ AbortCode ProcessImage::compile() {
 void ProcessImage::write_outputs(std::span<const uint8_t> sm2) {
   const size_t avail = sm2.size() * 8;
   for (const Copy& c : outputs_) {
-    if (c.pd_bit + c.bits > avail) break;  // copies are in process-data order
+    if (c.pd_bit + c.bits > avail) {
+      break;  // copies are in process-data order
+    }
     copy_bits(c.image, c.image_bit, sm2.data(), c.pd_bit, c.bits);
   }
-  for (Object* obj : output_hooks_) obj->hooks.after_write(*obj, -1);
+  for (Object* obj : output_hooks_) {
+    obj->hooks.after_write(*obj, -1);
+  }
 }
 
 void ProcessImage::read_inputs(std::span<uint8_t> sm3) {
-  for (Object* obj : input_hooks_) obj->hooks.before_read(*obj, -1);
+  for (Object* obj : input_hooks_) {
+    obj->hooks.before_read(*obj, -1);
+  }
   std::memset(sm3.data(), 0, std::min(sm3.size(), input_bytes()));
   const size_t avail = sm3.size() * 8;
   for (const Copy& c : inputs_) {
-    if (c.pd_bit + c.bits > avail) break;
+    if (c.pd_bit + c.bits > avail) {
+      break;
+    }
     copy_bits(sm3.data(), c.pd_bit, c.image, c.image_bit, c.bits);
   }
 }

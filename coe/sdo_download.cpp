@@ -20,52 +20,85 @@ constexpr uint8_t kResponse = static_cast<uint8_t>(CoeService::SdoResponse);
 AbortCode SdoServer::check_download_target(const Object& obj, uint8_t subindex, bool ca,
                                            size_t size, EsmState state) const {
   if (ca) {
-    if (obj.code() == ObjectCode::Var) return AbortCode::CompleteAccessUnsupported;
-    if (subindex > 1) return AbortCode::UnsupportedAccess;
-    if (size > ca_bytes(obj, subindex, obj.max_subindex())) return AbortCode::LengthTooHigh;
+    if (obj.code() == ObjectCode::Var) {
+      return AbortCode::CompleteAccessUnsupported;
+    }
+    if (subindex > 1) {
+      return AbortCode::UnsupportedAccess;
+    }
+    if (size > ca_bytes(obj, subindex, obj.max_subindex())) {
+      return AbortCode::LengthTooHigh;
+    }
     // Some entry must be writable now; the per-entry check follows with the data.
     uint16_t writable = 0;
-    for (const Entry& e : obj.entries())
-      if (e.subindex >= subindex && !e.padding) writable |= e.access;
+    for (const Entry& e : obj.entries()) {
+      if (e.subindex >= subindex && !e.padding) {
+        writable |= e.access;
+      }
+    }
     return check_write_access(writable, state);
   }
   const Entry* e = obj.entry(subindex);
-  if (!e || e->padding) return AbortCode::SubindexNotFound;
-  if (AbortCode rc = check_write_access(e->access, state); rc != AbortCode::None) return rc;
-  if (size > e->byte_length()) return AbortCode::LengthTooHigh;
-  if (size < e->byte_length() && e->type() != DataType::VisibleString)
+  if (!e || e->padding) {
+    return AbortCode::SubindexNotFound;
+  }
+  if (AbortCode rc = check_write_access(e->access, state); rc != AbortCode::None) {
+    return rc;
+  }
+  if (size > e->byte_length()) {
+    return AbortCode::LengthTooHigh;
+  }
+  if (size < e->byte_length() && e->type() != DataType::VisibleString) {
     return AbortCode::LengthTooLow;
+  }
   return AbortCode::None;
 }
 
 AbortCode SdoServer::write_entry(Object& obj, const Entry& e, std::span<const uint8_t> data,
                                  EsmState state) {
-  if (AbortCode rc = check_write_access(e.access, state); rc != AbortCode::None) return rc;
+  if (AbortCode rc = check_write_access(e.access, state); rc != AbortCode::None) {
+    return rc;
+  }
   const size_t len = e.byte_length();
-  if (data.size() > len) return AbortCode::LengthTooHigh;
+  if (data.size() > len) {
+    return AbortCode::LengthTooHigh;
+  }
   // A shorter VISIBLE_STRING is a shorter text: the rest of the entry is padded with 0.
-  if (data.size() < len && e.type() != DataType::VisibleString) return AbortCode::LengthTooLow;
-  if (len > scratch_.size()) return AbortCode::OutOfMemory;  // buffers sized by prepare()
+  if (data.size() < len && e.type() != DataType::VisibleString) {
+    return AbortCode::LengthTooLow;
+  }
+  if (len > scratch_.size()) {
+    return AbortCode::OutOfMemory;  // buffers sized by prepare()
+  }
   uint8_t* value = scratch_.data();
   std::memmove(value, data.data(), data.size());
   std::memset(value + data.size(), 0, len - data.size());
   const std::span<const uint8_t> v(value, len);
-  if (AbortCode rc = check_value(od_, obj, e, v, obj.image()); rc != AbortCode::None) return rc;
+  if (AbortCode rc = check_value(od_, obj, e, v, obj.image()); rc != AbortCode::None) {
+    return rc;
+  }
   const int subindex = e.subindex;
   if (obj.hooks.validate_write) {
-    if (AbortCode rc = obj.hooks.validate_write(obj, subindex, v, state); rc != AbortCode::None)
+    if (AbortCode rc = obj.hooks.validate_write(obj, subindex, v, state); rc != AbortCode::None) {
       return rc;
+    }
   }
   copy_bits(obj.image().data(), e.bit_offset, value, 0, e.bit_length);
-  if (obj.hooks.after_write) obj.hooks.after_write(obj, subindex);
+  if (obj.hooks.after_write) {
+    obj.hooks.after_write(obj, subindex);
+  }
   return AbortCode::None;
 }
 
 AbortCode SdoServer::commit_download(Object& obj, uint8_t subindex, bool ca,
                                      std::span<const uint8_t> data, EsmState state) {
-  if (ca) return write_complete(obj, subindex, data, state);
+  if (ca) {
+    return write_complete(obj, subindex, data, state);
+  }
   const Entry* e = obj.entry(subindex);
-  if (!e || e->padding) return AbortCode::SubindexNotFound;
+  if (!e || e->padding) {
+    return AbortCode::SubindexNotFound;
+  }
   return write_entry(obj, *e, data, state);
 }
 
@@ -77,9 +110,10 @@ size_t SdoServer::download_initiate(std::span<const uint8_t> body, std::span<uin
   const uint8_t subindex = body[3];
   const bool ca = (cmd & sdo::kCompleteAccess) != 0;
   Object* obj = od_.find(index);
-  if (!obj)
+  if (!obj) {
     return abort(reply, index, subindex,
                  od_.size() ? AbortCode::ObjectNotFound : AbortCode::NoDictionary);
+  }
 
   AbortCode rc = AbortCode::None;
   if (cmd & sdo::kExpedited) {
@@ -89,7 +123,9 @@ size_t SdoServer::download_initiate(std::span<const uint8_t> body, std::span<uin
     if (cmd & sdo::kSizeIndicated) {
       size = 4 - ((cmd >> 2) & 0x03);
     } else if (!ca) {
-      if (const Entry* e = obj->entry(subindex)) size = std::min<size_t>(4, e->byte_length());
+      if (const Entry* e = obj->entry(subindex)) {
+        size = std::min<size_t>(4, e->byte_length());
+      }
     }
     rc = commit_download(*obj, subindex, ca, body.subspan(4, size), state);
   } else {
@@ -100,14 +136,18 @@ size_t SdoServer::download_initiate(std::span<const uint8_t> body, std::span<uin
       rc = commit_download(*obj, subindex, ca, body.subspan(sdo::kInitiateBody, size), state);
     } else {
       rc = check_download_target(*obj, subindex, ca, size, state);
-      if (rc == AbortCode::None && size > data_.size()) rc = AbortCode::OutOfMemory;
+      if (rc == AbortCode::None && size > data_.size()) {
+        rc = AbortCode::OutOfMemory;
+      }
       if (rc == AbortCode::None) {
         std::memcpy(data_.data(), body.data() + sdo::kInitiateBody, in_frame);
         transfer_ = Transfer{TransferKind::Download, index, subindex, ca, 0, size, in_frame};
       }
     }
   }
-  if (rc != AbortCode::None) return abort(reply, index, subindex, rc);
+  if (rc != AbortCode::None) {
+    return abort(reply, index, subindex, rc);
+  }
   // Initiate download response (Table 37): 0x60 (| CA), index, subindex, 4 reserved bytes.
   uint8_t* b = reply.data() + kBodyOffset;
   b[0] = static_cast<uint8_t>((sdo::kScsDownloadInitiate << 5) | (ca ? sdo::kCompleteAccess : 0));
@@ -121,25 +161,34 @@ size_t SdoServer::download_segment(std::span<const uint8_t> body, std::span<uint
                                    EsmState state) {
   const uint8_t cmd = body[0];
   const Transfer t = transfer_;
-  if (t.kind != TransferKind::Download)
+  if (t.kind != TransferKind::Download) {
     return abort(reply, t.index, t.subindex, AbortCode::CommandSpecifier);
-  if ((cmd & sdo::kToggle) != t.toggle)
+  }
+  if ((cmd & sdo::kToggle) != t.toggle) {
     return abort(reply, t.index, t.subindex, AbortCode::ToggleBit);
+  }
   // Segment data (Table 40): a mailbox longer than the minimum carries body - 1 bytes;
   // the minimum (7 data bytes) says in bits 1-3 how many of them are unused.
   const size_t seg = body.size() > sdo::kSegmentMinBody ? body.size() - 1 : 7 - ((cmd >> 1) & 0x07);
-  if (t.done + seg > t.size) return abort(reply, t.index, t.subindex, AbortCode::LengthMismatch);
+  if (t.done + seg > t.size) {
+    return abort(reply, t.index, t.subindex, AbortCode::LengthMismatch);
+  }
   std::memcpy(data_.data() + t.done, body.data() + 1, seg);
   transfer_.done += seg;
   const bool last = (cmd & sdo::kLastSegment) != 0;
   if (last) {
-    if (transfer_.done != t.size)
+    if (transfer_.done != t.size) {
       return abort(reply, t.index, t.subindex, AbortCode::LengthMismatch);
+    }
     Object* obj = od_.find(t.index);
-    if (!obj) return abort(reply, t.index, t.subindex, AbortCode::ObjectNotFound);
+    if (!obj) {
+      return abort(reply, t.index, t.subindex, AbortCode::ObjectNotFound);
+    }
     const AbortCode rc =
         commit_download(*obj, t.subindex, t.complete_access, {data_.data(), t.size}, state);
-    if (rc != AbortCode::None) return abort(reply, t.index, t.subindex, rc);
+    if (rc != AbortCode::None) {
+      return abort(reply, t.index, t.subindex, rc);
+    }
     transfer_ = {};
   } else {
     transfer_.toggle ^= sdo::kToggle;

@@ -16,12 +16,18 @@ constexpr size_t kBodyOffset = MailboxHeader::kSize + CoeHeader::kSize;
 constexpr uint8_t kService = static_cast<uint8_t>(CoeService::SdoInformation);
 
 uint16_t object_data_type(const Object& obj) {
-  if (obj.data_type() != 0) return obj.data_type();
+  if (obj.data_type() != 0) {
+    return obj.data_type();
+  }
   // VAR: the value's type; ARRAY: the element type (subindex 1).
   if (obj.code() == ObjectCode::Var) {
-    if (const Entry* e = obj.entry(0)) return e->data_type;
+    if (const Entry* e = obj.entry(0)) {
+      return e->data_type;
+    }
   } else if (obj.code() == ObjectCode::Array) {
-    if (const Entry* e = obj.entry(1)) return e->data_type;
+    if (const Entry* e = obj.entry(1)) {
+      return e->data_type;
+    }
   }
   return 0;
 }
@@ -46,7 +52,9 @@ bool SdoServer::in_list(const Object& obj, uint16_t list_type) const {
 
 size_t SdoServer::list_count(uint16_t list_type) const {
   size_t n = 0;
-  for (size_t i = 0; i < od_.size(); ++i) n += in_list(od_.at(i), list_type);
+  for (size_t i = 0; i < od_.size(); ++i) {
+    n += in_list(od_.at(i), list_type);
+  }
   return n;
 }
 
@@ -69,7 +77,7 @@ size_t SdoServer::describe_object(const Object& obj) {
   p[4] = obj.max_subindex();
   p[5] = static_cast<uint8_t>(obj.code());
   const size_t name = std::min(obj.name().size(), info_buf_.size() - 6);
-  std::memcpy(p + 6, obj.name().data(), name);
+  std::copy_n(obj.name().data(), name, p + 6);
   return 6 + name;
 }
 
@@ -86,7 +94,9 @@ size_t SdoServer::describe_entry(const Object& obj, const Entry& e, uint8_t valu
   uint8_t given = 0;
   const size_t len = e.byte_length();
   // Values of an entry larger than the buffer sized by prepare() are left out (bits cleared).
-  if (10 + 2 + 3 * len > info_buf_.size()) value_info &= sdo_info::kValueUnitType;
+  if (10 + 2 + 3 * len > info_buf_.size()) {
+    value_info &= sdo_info::kValueUnitType;
+  }
   if (value_info & sdo_info::kValueUnitType) {
     put_le16(p + pos, e.unit_type);
     pos += 2;
@@ -94,8 +104,9 @@ size_t SdoServer::describe_entry(const Object& obj, const Entry& e, uint8_t valu
   }
   if (value_info & sdo_info::kValueDefault) {
     std::memset(p + pos, 0, len);
-    if (!e.default_value.empty())
+    if (!e.default_value.empty()) {
       std::memcpy(p + pos, e.default_value.data(), std::min(len, e.default_value.size()));
+    }
     pos += len;
     given |= sdo_info::kValueDefault;
   }
@@ -113,7 +124,7 @@ size_t SdoServer::describe_entry(const Object& obj, const Entry& e, uint8_t valu
   }
   p[3] = given;
   const size_t name = std::min(e.name.size(), info_buf_.size() - pos);
-  std::memcpy(p + pos, e.name.data(), name);
+  std::copy_n(e.name.data(), name, p + pos);  // no terminator on the wire
   return pos + name;
 }
 
@@ -121,8 +132,9 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
   const uint8_t opcode = body[0] & 0x7F;
   // Requests are never fragmented (§5.6.3.2): an incomplete flag or fragments left is a
   // malformed SDO Information header.
-  if ((body[0] & sdo_info::kIncomplete) || get_le16(&body[2]) != 0)
+  if ((body[0] & sdo_info::kIncomplete) || get_le16(&body[2]) != 0) {
     return mailbox_error(reply, MailboxError::InvalidHeader, 0);
+  }
   const auto data = body.subspan(sdo_info::kHeaderSize);
   // Fragment payloads stay even so list entries never straddle two mailboxes (masters such as
   // SOEM read each fragment as whole 16-bit words).
@@ -130,34 +142,49 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
 
   switch (opcode) {
     case sdo_info::kGetOdListRequest: {
-      if (data.size() < 2) return mailbox_error(reply, MailboxError::SizeTooShort, 0);
+      if (data.size() < 2) {
+        return mailbox_error(reply, MailboxError::SizeTooShort, 0);
+      }
       const uint16_t list_type = get_le16(data.data());
-      if (list_type > sdo_info::kListSettings)
+      if (list_type > sdo_info::kListSettings) {
         return info_error(reply, AbortCode::UnsupportedAccess);
+      }
       if (list_type == sdo_info::kListLengths) {
         // §5.6.3.3.2: list type 0 answers with the length of lists 1..5 (fragmented like any
         // other answer when the mailbox is small).
         uint8_t* p = info_buf_.data();
         put_le16(p, list_type);
-        for (uint16_t t = 1; t <= 5; ++t) put_le16(p + 2 * t, static_cast<uint16_t>(list_count(t)));
+        for (uint16_t t = 1; t <= 5; ++t) {
+          put_le16(p + 2 * t, static_cast<uint16_t>(list_count(t)));
+        }
         return start_fragments(reply, InfoKind::Buffer, sdo_info::kGetOdListResponse, 12, fragment);
       }
       return start_fragments(reply, InfoKind::List, sdo_info::kGetOdListResponse,
                              2 + 2 * list_count(list_type), fragment, list_type);
     }
     case sdo_info::kGetObjectDescriptionRequest: {
-      if (data.size() < 2) return mailbox_error(reply, MailboxError::SizeTooShort, 0);
+      if (data.size() < 2) {
+        return mailbox_error(reply, MailboxError::SizeTooShort, 0);
+      }
       const Object* obj = od_.find(get_le16(data.data()));
-      if (!obj) return info_error(reply, AbortCode::ObjectNotFound);
+      if (!obj) {
+        return info_error(reply, AbortCode::ObjectNotFound);
+      }
       return start_fragments(reply, InfoKind::Buffer, sdo_info::kGetObjectDescriptionResponse,
                              describe_object(*obj), fragment);
     }
     case sdo_info::kGetEntryDescriptionRequest: {
-      if (data.size() < 4) return mailbox_error(reply, MailboxError::SizeTooShort, 0);
+      if (data.size() < 4) {
+        return mailbox_error(reply, MailboxError::SizeTooShort, 0);
+      }
       const Object* obj = od_.find(get_le16(data.data()));
-      if (!obj) return info_error(reply, AbortCode::ObjectNotFound);
+      if (!obj) {
+        return info_error(reply, AbortCode::ObjectNotFound);
+      }
       const Entry* e = obj->entry(data[2]);
-      if (!e || e->padding) return info_error(reply, AbortCode::SubindexNotFound);
+      if (!e || e->padding) {
+        return info_error(reply, AbortCode::SubindexNotFound);
+      }
       return start_fragments(reply, InfoKind::Buffer, sdo_info::kGetEntryDescriptionResponse,
                              describe_entry(*obj, *e, data[3]), fragment);
     }
@@ -185,7 +212,9 @@ size_t SdoServer::start_fragments(std::span<uint8_t> reply, InfoKind kind, uint8
 size_t SdoServer::info_fragment(std::span<uint8_t> reply) {
   // Fragments keep the size announced by fragments-left; a smaller mailbox waits.
   const size_t room = (reply.size() - kBodyOffset - sdo_info::kHeaderSize) & ~size_t{1};
-  if (room < info_.fragment_size && info_.sent != 0) return 0;
+  if (room < info_.fragment_size && info_.sent != 0) {
+    return 0;
+  }
   const size_t chunk = std::min(info_.fragment_size, info_.total - info_.sent);
   const bool more = info_.sent + chunk < info_.total;
   uint8_t* b = reply.data() + kBodyOffset;
@@ -202,8 +231,9 @@ size_t SdoServer::info_fragment(std::span<uint8_t> reply) {
     for (size_t i = 0; i < chunk / 2; ++i, ++word) {
       uint16_t value = info_.list_type;
       if (word != 0) {
-        while (info_.cursor < od_.size() && !in_list(od_.at(info_.cursor), info_.list_type))
+        while (info_.cursor < od_.size() && !in_list(od_.at(info_.cursor), info_.list_type)) {
           ++info_.cursor;
+        }
         // The dictionary cannot shrink mid-list on the request path; guard anyway.
         value = info_.cursor < od_.size() ? od_.at(info_.cursor++).index() : 0;
       }

@@ -61,7 +61,9 @@ size_t SdoServer::finish_coe(std::span<uint8_t> reply, size_t body_length, uint8
 size_t SdoServer::mailbox_error(std::span<uint8_t> reply, MailboxError error, uint16_t address) {
   const uint8_t next = next_mailbox_counter(counter_);
   const size_t n = write_mailbox_error(reply, error, address, next);
-  if (n) counter_ = next;
+  if (n) {
+    counter_ = next;
+  }
   return n;
 }
 
@@ -80,11 +82,16 @@ size_t SdoServer::abort(std::span<uint8_t> reply, uint16_t index, uint8_t subind
 
 size_t SdoServer::handle(std::span<const uint8_t> request, std::span<uint8_t> reply,
                          EsmState state) {
-  if (reply.size() < kMinReply) return mailbox_error(reply, MailboxError::NoMoreMemory, 0);
+  if (reply.size() < kMinReply) {
+    return mailbox_error(reply, MailboxError::NoMoreMemory, 0);
+  }
   const auto hdr = MailboxHeader::decode(request);
-  if (!hdr) return mailbox_error(reply, MailboxError::Syntax, 0);
-  if (hdr->length > request.size() - MailboxHeader::kSize)
+  if (!hdr) {
+    return mailbox_error(reply, MailboxError::Syntax, 0);
+  }
+  if (hdr->length > request.size() - MailboxHeader::kSize) {
     return mailbox_error(reply, MailboxError::InvalidSize, hdr->address);
+  }
   const auto msg = request.first(MailboxHeader::kSize + hdr->length);
 
   // A repeat of the previous request (same non-zero counter, same bytes) gets the previous
@@ -115,21 +122,29 @@ size_t SdoServer::handle(std::span<const uint8_t> request, std::span<uint8_t> re
 
 size_t SdoServer::dispatch(std::span<const uint8_t> msg, std::span<uint8_t> reply, EsmState state) {
   const auto hdr = *MailboxHeader::decode(msg);
-  if (hdr.channel != 0) return mailbox_error(reply, MailboxError::InvalidChannel, hdr.address);
-  if (hdr.mailbox_type() != MailboxType::CoE)
+  if (hdr.channel != 0) {
+    return mailbox_error(reply, MailboxError::InvalidChannel, hdr.address);
+  }
+  if (hdr.mailbox_type() != MailboxType::CoE) {
     return mailbox_error(reply, MailboxError::UnsupportedProtocol, hdr.address);
+  }
   const auto data = msg.subspan(MailboxHeader::kSize);
   const auto coe = CoeHeader::decode(data);
-  if (!coe) return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
+  if (!coe) {
+    return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
+  }
   const auto body = data.subspan(CoeHeader::kSize);
   switch (static_cast<CoeService>(coe->service)) {
     case CoeService::SdoRequest:
       // Every SDO request is at least 8 bytes after the CoE header (mailbox length >= 10).
-      if (body.size() < sdo::kInitiateBody)
+      if (body.size() < sdo::kInitiateBody) {
         return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
+      }
       return sdo_request(body, reply, state);
     case CoeService::SdoInformation:
-      if (body.size() < 4) return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
+      if (body.size() < 4) {
+        return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
+      }
       return sdo_info(body, reply);
     default:
       return mailbox_error(reply, MailboxError::ServiceNotSupported, hdr.address);
@@ -158,7 +173,9 @@ size_t SdoServer::sdo_request(std::span<const uint8_t> body, std::span<uint8_t> 
 }
 
 size_t SdoServer::poll(std::span<uint8_t> reply) {
-  if (reply.size() < kMinReply) return 0;
+  if (reply.size() < kMinReply) {
+    return 0;
+  }
   Emergency e;
   if (emergencies_.pop(e)) {
     // ETG.1000.6 §5.6.4: error code, error register, 5 data bytes after the CoE header.
@@ -168,7 +185,9 @@ size_t SdoServer::poll(std::span<uint8_t> reply) {
     std::copy(e.data.begin(), e.data.end(), b + 3);
     return finish_coe(reply, 8, static_cast<uint8_t>(CoeService::Emergency));
   }
-  if (info_.kind != InfoKind::None) return info_fragment(reply);
+  if (info_.kind != InfoKind::None) {
+    return info_fragment(reply);
+  }
   return 0;
 }
 

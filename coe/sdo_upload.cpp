@@ -24,9 +24,10 @@ size_t SdoServer::upload_initiate(std::span<const uint8_t> body, std::span<uint8
   const uint8_t subindex = body[3];
   const bool ca = (cmd & sdo::kCompleteAccess) != 0;
   Object* obj = od_.find(index);
-  if (!obj)
+  if (!obj) {
     return abort(reply, index, subindex,
                  od_.size() ? AbortCode::ObjectNotFound : AbortCode::NoDictionary);
+  }
 
   uint8_t* b = reply.data() + kBodyOffset;
   const uint8_t ca_bit = ca ? sdo::kCompleteAccess : 0;
@@ -34,10 +35,15 @@ size_t SdoServer::upload_initiate(std::span<const uint8_t> body, std::span<uint8
   const Entry* entry = nullptr;
   if (!ca) {
     entry = obj->entry(subindex);
-    if (!entry || entry->padding) return abort(reply, index, subindex, AbortCode::SubindexNotFound);
-    if (AbortCode rc = check_read_access(entry->access, state); rc != AbortCode::None)
+    if (!entry || entry->padding) {
+      return abort(reply, index, subindex, AbortCode::SubindexNotFound);
+    }
+    if (AbortCode rc = check_read_access(entry->access, state); rc != AbortCode::None) {
       return abort(reply, index, subindex, rc);
-    if (obj->hooks.before_read) obj->hooks.before_read(*obj, subindex);
+    }
+    if (obj->hooks.before_read) {
+      obj->hooks.before_read(*obj, subindex);
+    }
     n = entry->byte_length();
     if (n >= 1 && n <= 4) {
       // Expedited (Table 38): 0x43 | (4 - n) << 2, data in the 4 bytes after the subindex.
@@ -59,7 +65,9 @@ size_t SdoServer::upload_initiate(std::span<const uint8_t> body, std::span<uint8
   uint8_t* dst = b + sdo::kInitiateBody;
   if (n > room) {
     // Segmented (§5.6.2.6): snapshot the value so every segment belongs to one consistent value.
-    if (n > data_.size()) return abort(reply, index, subindex, AbortCode::OutOfMemory);
+    if (n > data_.size()) {
+      return abort(reply, index, subindex, AbortCode::OutOfMemory);
+    }
     dst = data_.data();
   }
   if (ca) {
@@ -84,10 +92,12 @@ size_t SdoServer::upload_initiate(std::span<const uint8_t> body, std::span<uint8
 
 size_t SdoServer::upload_segment(std::span<const uint8_t> body, std::span<uint8_t> reply) {
   const uint8_t cmd = body[0];
-  if (transfer_.kind != TransferKind::Upload)
+  if (transfer_.kind != TransferKind::Upload) {
     return abort(reply, transfer_.index, transfer_.subindex, AbortCode::CommandSpecifier);
-  if ((cmd & sdo::kToggle) != transfer_.toggle)
+  }
+  if ((cmd & sdo::kToggle) != transfer_.toggle) {
     return abort(reply, transfer_.index, transfer_.subindex, AbortCode::ToggleBit);
+  }
 
   // Upload segment response (Table 42): data fills the mailbox; fewer than 7 bytes are padded
   // to 7 with the count of unused bytes in bits 1-3.
@@ -99,10 +109,14 @@ size_t SdoServer::upload_segment(std::span<const uint8_t> body, std::span<uint8_
   b[0] = static_cast<uint8_t>((sdo::kScsUploadSegment << 5) | transfer_.toggle |
                               (last ? sdo::kLastSegment : 0) | (chunk < 7 ? (7 - chunk) << 1 : 0));
   std::memcpy(b + 1, data_.data() + transfer_.done, chunk);
-  if (chunk < 7) std::memset(b + 1 + chunk, 0, 7 - chunk);
+  if (chunk < 7) {
+    std::memset(b + 1 + chunk, 0, 7 - chunk);
+  }
   transfer_.done += chunk;
   transfer_.toggle ^= sdo::kToggle;
-  if (last) transfer_ = {};
+  if (last) {
+    transfer_ = {};
+  }
   return finish_coe(reply, 1 + std::max<size_t>(chunk, 7), kResponse);
 }
 
