@@ -19,6 +19,7 @@
 #include "mdp/object_dictionary_builder.hpp"
 #include "mdp/parameter_set.hpp"
 #include "mdp/parameter_store.hpp"
+#include "mdp/parameter_writer.hpp"
 
 namespace rackcat::mdp {
 
@@ -69,7 +70,8 @@ struct Device::Impl {
   std::unique_ptr<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
   std::unique_ptr<ParameterSet> params;
   std::unique_ptr<ParameterStore> store;
-  std::vector<uint8_t> default_payload;  // the parameter set as shipped (factory defaults)
+  std::unique_ptr<ParameterWriter> writer;  // after `store`: destroyed (and flushed) first
+  std::vector<uint8_t> default_payload;     // the parameter set as shipped (factory defaults)
   std::string state_dir;
   std::string load_report;
   EsmState state = EsmState::Init;
@@ -252,6 +254,7 @@ void Device::Impl::install_hooks() {
   command_hooks(
       0xFBF0,
       [this](std::span<const uint8_t> c) {
+        writer->wait_idle();
         pending.factory = c[5] == cmd::kFactoryReset;
         if (pending.factory) {
           std::string error;
@@ -277,23 +280,28 @@ void Device::Impl::install_hooks() {
         pending.status = cmd::kStatusDoneNoResponse;
         finish_command(obj, {});
       });
-  // 0xFBF2 store.
+  // 0xFBF2 store: the snapshot is taken now, written by the worker (status 255 until done).
   command_hooks(
       0xFBF2,
       [this](std::span<const uint8_t>) {
-        std::string error;
-        if (!store->save(params->fingerprint(), params->capture(), error)) {
-          load_report = error;
-          return fail_command(0xFBF2);
-        }
-        pending.status = cmd::kStatusDoneNoResponse;
+        writer->submit(params->fingerprint(), params->capture());
+        pending.status = cmd::kStatusExecuting;
         return AbortCode::None;
       },
       [this](Object& obj) { finish_command(obj, cmd::kStoreCapabilities); });
+  od.find(0xFBF2)->hooks.before_read = [this](Object& obj, int) {
+    if (obj.get_u(2) != cmd::kStatusExecuting || writer->busy()) return;
+    const auto error = writer->last_error();
+    if (error) load_report = *error;
+    const uint8_t status = error ? cmd::kStatusError : cmd::kStatusDoneNoResponse;
+    obj.set_u(2, status);
+    obj.bytes(3)[0] = status;
+  };
   // 0xFBF3 checksum over the parameters as stored at the time of the command.
   command_hooks(
       0xFBF3,
       [this](std::span<const uint8_t> c) {
+        writer->wait_idle();
         const std::vector<uint8_t> payload = stored_payload();
         const uint8_t algo = c[0] == cmd::kChecksumDefault ? cmd::kChecksumMd5 : c[0];
         if (algo == cmd::kChecksumCrc32) {
@@ -312,6 +320,7 @@ void Device::Impl::install_hooks() {
   command_hooks(
       0xFBF4,
       [this](std::span<const uint8_t>) {
+        writer->wait_idle();
         std::string detail;
         const auto r = store->load(params->fingerprint(), pending.payload, detail);
         load_report = detail;
@@ -342,6 +351,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.default_payload = d.params->capture();
   d.state_dir = options.state_dir.empty() ? default_state_dir() : options.state_dir;
   d.store = std::make_unique<ParameterStore>(d.state_dir + "/parameters.bin");
+  d.writer = std::make_unique<ParameterWriter>(*d.store);
   d.image = std::make_unique<coe::ProcessImage>(d.od);
   d.install_hooks();
   if (options.load_stored_parameters) {

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "mdp/device.hpp"
 #include "mdp/parameter_store.hpp"
@@ -43,6 +44,15 @@ class Commands : public ::testing::Test {
     device->state_changed(EsmState::Init, EsmState::PreOp);
   }
   void go(EsmState to) { device->state_changed(device->state(), to); }
+  // 0xFBF2 answers at once with status 255 (executing); the store finishes on a worker thread.
+  uint64_t wait_store() {
+    uint64_t status = 255;
+    for (int i = 0; i < 4000 && status == 255; ++i) {
+      status = sdo->read_u(0xFBF2, 2);
+      if (status == 255) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return status;
+  }
   std::vector<uint8_t> read(uint16_t index, uint8_t sub) {
     std::vector<uint8_t> d;
     EXPECT_EQ(sdo->upload(index, sub, d), 0u);
@@ -61,7 +71,7 @@ TEST_F(Commands, StoreKeepsParametersOverARestart) {
   go(EsmState::Op);
   ASSERT_EQ(sdo->write_u(0x4000, 3, 0x00A5, 2), 0u);  // safe-state value (writable in OP)
   ASSERT_EQ(sdo->download(0xFBF2, 1, kStore), 0u);
-  EXPECT_EQ(sdo->read_u(0xFBF2, 2), 0u);                              // done, no error
+  EXPECT_EQ(wait_store(), 0u);                                        // done, no error
   EXPECT_EQ(read(0xFBF2, 1), (std::vector<uint8_t>{0x01, 0, 0, 0}));  // reads its capability
   EXPECT_EQ(read(0xFBF2, 3), (std::vector<uint8_t>{0, 0}));
   restart();
@@ -70,6 +80,34 @@ TEST_F(Commands, StoreKeepsParametersOverARestart) {
   EXPECT_EQ(sdo->read_u(0xF3A2, 1), 0x0000FFFFu);
   EXPECT_EQ(sdo->read_u(0x4000, 3), 0x00A5u);
   EXPECT_NE(device->load_report().find("loaded"), std::string::npos) << device->load_report();
+}
+
+TEST_F(Commands, StoreAnswersAtOnceAndReportsExecutingUntilWritten) {
+  ASSERT_EQ(sdo->download(0xFBF2, 1, kStore), 0u);
+  const uint64_t first = sdo->read_u(0xFBF2, 2);
+  EXPECT_TRUE(first == 255 || first == 0) << first;
+  EXPECT_EQ(wait_store(), 0u);
+  EXPECT_TRUE(std::filesystem::exists(device->parameter_file()));
+}
+
+TEST_F(Commands, StoreFailureIsReportedInTheStatus) {
+  // The state directory is a file: the store cannot create it.
+  sdo.reset();
+  device.reset();
+  std::filesystem::create_directories(std::filesystem::path(dir).parent_path());
+  { std::ofstream(dir) << "not a directory"; }
+  DeviceOptions opt;
+  opt.state_dir = dir;
+  device = std::make_unique<Device>(default_rack(), opt);
+  sdo = std::make_unique<SdoClient>(*device);
+  device->state_changed(EsmState::Init, EsmState::PreOp);
+  ASSERT_EQ(sdo->download(0xFBF2, 1, kStore), 0u);
+  EXPECT_EQ(wait_store(), 2u);  // last command completed, error
+  EXPECT_EQ(read(0xFBF2, 3)[0], 2);
+  EXPECT_NE(device->load_report().find("cannot"), std::string::npos) << device->load_report();
+  sdo.reset();
+  device.reset();
+  std::filesystem::remove(dir);
 }
 
 TEST_F(Commands, WrongCommandBytesAreIncompatibleAndChangeNothing) {
@@ -132,6 +170,7 @@ std::vector<uint8_t> stored_payload(const std::string& file) {
 TEST_F(Commands, ChecksumsCoverTheParametersAsStored) {
   ASSERT_EQ(sdo->write_text(0x2000, 0x04, "10.0.0.11"), 0u);
   ASSERT_EQ(sdo->download(0xFBF2, 1, kStore), 0u);
+  ASSERT_EQ(wait_store(), 0u);
   ASSERT_EQ(sdo->write_text(0x2000, 0x04, "10.0.0.12"), 0u);  // not stored: not in the sum
   const std::vector<uint8_t> payload = stored_payload(device->parameter_file());
   EXPECT_EQ(read(0xFBF3, 1), (std::vector<uint8_t>{0x0F, 0, 0, 0}));
@@ -183,6 +222,7 @@ TEST_F(Commands, ExceptionResetClearsLatchedObjectsAndKeepsTheLiveRimState) {
 TEST_F(Commands, CorruptOrForeignFilesAreReportedAndIgnored) {
   ASSERT_EQ(sdo->write_text(0x2000, 0x04, "10.0.0.13"), 0u);
   ASSERT_EQ(sdo->download(0xFBF2, 1, kStore), 0u);
+  ASSERT_EQ(wait_store(), 0u);
   const std::string file = device->parameter_file();
   {  // flip one payload byte
     std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
