@@ -3,6 +3,7 @@ EEPROM bytes SOEM reads from the running slave (pysoem eeprom_read over veth) eq
 sii -o FILE` byte for byte, and the ESI file describes the identity, mailbox and process-data
 SyncManagers the master finds, for the default rack and for a rack file.
 """
+import json
 import struct
 import xml.etree.ElementTree as ET
 
@@ -87,6 +88,61 @@ def test_sii_on_the_wire_equals_rackcat_sii_and_esi(rackcat, tmp_path, rack):
         assert (len(s.output), len(s.input)) == (int(sms[2].get("DefaultSize")),
                                                  int(sms[3].get("DefaultSize")))
         to_op(master)
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    rc.stop()
+
+
+# SOEM keeps object and entry names in EC_MAXNAME = 40 characters.
+SOEM_MAXNAME = 40
+OBJECT_CODES = {7: "VAR", 8: "ARRAY", 9: "RECORD"}
+
+
+def test_sdo_information_on_the_wire_equals_rackcat_od(rackcat):
+    """What a master learns through SDO Information (object list, object and entry
+    descriptions; SOEM's ecx_readODlist/ODdescription/OE as pysoem's slave.od) equals the
+    dictionary `rackcat od --format json` prints: the same objects, names, object codes, data
+    types, bit lengths and access bits, for every subindex up to the object's highest."""
+    reference = json.loads(rackcat_tool("od", "--format", "json").stdout)["objects"]
+    expected = {int(o["index"], 16): o for o in reference}
+    rc = rackcat(extra=["--no-pty"])
+    master = open_master(rc.iface, 1)
+    try:
+        od = master.slaves[0].od
+        assert sorted(o.index for o in od) == sorted(expected), "object list (list type 1)"
+        problems = []
+        for o in od:
+            ref = expected[o.index]
+            name = o.name.decode(errors="replace")
+            if (name, OBJECT_CODES.get(o.object_code)) != (ref["name"][:SOEM_MAXNAME],
+                                                           ref["object_code"]):
+                problems.append(f"0x{o.index:04X}: {name!r} {o.object_code} vs "
+                                f"{ref['name']!r} {ref['object_code']}")
+            if ref["object_code"] == "VAR":
+                e = ref["entries"][0]
+                if (o.data_type, o.bit_length) != (e["data_type"], e["bit_size"]):
+                    problems.append(f"0x{o.index:04X}: type {o.data_type}/{o.bit_length} vs "
+                                    f"{e['data_type']}/{e['bit_size']}")
+                continue
+            try:
+                entries = o.entries
+            except pysoem.SdoInfoError as err:
+                problems.append(f"0x{o.index:04X}: entry descriptions failed ({err}); "
+                                f"highest subindex {ref['entries'][-1]['subindex']}")
+                continue
+            for e in ref["entries"]:
+                k = e["subindex"]
+                want = (e["name"][:SOEM_MAXNAME], e["data_type"], e["bit_size"],
+                        e["access_bits"])
+                got = entries[k] if k < len(entries) else None
+                got = got and (got.name.decode(errors="replace"), got.data_type,
+                               got.bit_length, got.obj_access)
+                if e["padding"] and got == ("", 0, 0, 0):
+                    continue  # a gap inside the object: no description, as SOEM skips it
+                if got != want:
+                    problems.append(f"0x{o.index:04X}:{k:02X}: {got} vs {want}")
+        assert problems == [], f"{len(problems)} differences:\n" + "\n".join(problems[:20])
         go(master, pysoem.INIT_STATE)
     finally:
         master.close()
