@@ -146,3 +146,39 @@ TEST_F(SdoTest, SegmentedCompleteAccessBothWays) {
 
 }  // namespace
 }  // namespace rackcat::coe::test
+
+namespace rackcat::coe::test {
+namespace {
+
+TEST_F(SdoTest, CompleteAccessReadChecksEveryEntryInUse) {
+  // A RECORD with a write-only entry cannot be read as a whole.
+  Object o(0x3000, ObjectCode::Record, "Mixed");
+  o.add(entry(0, "SubIndex 000", DataType::Unsigned8, 8, access::kRo, {2}));
+  o.add(entry(1, "Readable", DataType::Unsigned8, 8, access::kRw));
+  o.add(entry(2, "Secret", DataType::Unsigned8, 8, access::kWo));
+  od.add(std::move(o));
+  EXPECT_EQ(payload(sdo(upload_req(0x3000, 0, true))), abort_payload(0x3000, 0, 0x06010001));
+  // With only subindex 1 in use, it can.
+  od.find(0x3000)->set_u(0, 1);
+  EXPECT_EQ(payload(sdo(upload_req(0x3000, 0, true))),
+            (Bytes{0x00, 0x30, 0x51, 0x00, 0x30, 0x00, 0x03, 0x00, 0x00, 0x00, 0x01, 0x00, 0x00}));
+  // A readable-in-PREOP-only entry: wrong state in OP.
+  Object p(0x3001, ObjectCode::Record, "Preop read");
+  p.add(entry(0, "SubIndex 000", DataType::Unsigned8, 8, access::kRo, {1}));
+  p.add(entry(1, "Value", DataType::Unsigned8, 8, access::kReadPreOp));
+  od.add(std::move(p));
+  EXPECT_EQ(payload(sdo(upload_req(0x3001, 0, true), EsmState::Op)),
+            abort_payload(0x3001, 0, 0x08000022));
+}
+
+TEST_F(SdoTest, CompleteAccessOfAnEmptyArrayFromSubindexOne) {
+  od.find(0x1C12)->set_u(0, 0);
+  // Nothing in use: a normal response with complete size 0.
+  EXPECT_EQ(payload(sdo(upload_req(0x1C12, 1, true))),
+            (Bytes{0x00, 0x30, 0x51, 0x12, 0x1C, 0x01, 0x00, 0x00, 0x00, 0x00}));
+  EXPECT_EQ(payload(sdo(upload_req(0x1C12, 0, true))),
+            (Bytes{0x00, 0x30, 0x51, 0x12, 0x1C, 0x00, 0x02, 0x00, 0x00, 0x00, 0x00, 0x00}));
+}
+
+}  // namespace
+}  // namespace rackcat::coe::test
