@@ -64,6 +64,34 @@ TEST(Datagrams, ChainOfApwrFprdFprwNop) {
   EXPECT_EQ(line.esc(0).read16(0x0F80), 0xBBAA);
 }
 
+TEST(Datagrams, GoldenArmwInTwoSlaveLine) {
+  Line line(2);
+  line.master->send(Command::Apwr, 0, 0x0F80, {0x5A});
+  // ARMW ADP 0: slave 0 reads 0x5A into the datagram, slave 1 writes it; ADP +2, WKC 2.
+  const auto reply = run(line, hex("ff ff ff ff ff ff 00 00 00 00 00 01 88 a4 0d 10"
+                                   "0d 05 00 00 80 0f 01 00 00 00  00  00 00"));
+  EXPECT_EQ(reply, hex("ff ff ff ff ff ff 02 00 00 00 00 01 88 a4 0d 10"
+                       "0d 05 02 00 80 0f 01 00 00 00  5a  02 00"));
+  EXPECT_EQ(line.esc(1).read8(0x0F80), 0x5A);
+}
+
+TEST(Datagrams, GoldenCyclicFrameInOp) {
+  Line line(1);
+  // The clock started at 1 s when the slave powered up: its local time is now 0x0102030405.
+  line.clock.set(1'000'000'000 + 0x0102030405ull);
+  line.to_op();
+  // SOEM's cyclic frame: LRW over 4 output + 6 input bytes at logical 0, FRMW 0x0910 from
+  // station 0x1001 (8 bytes). LRW WKC 3 (read + write), FRMW WKC 1 (the reference reads).
+  const auto reply =
+      run(line, hex("ff ff ff ff ff ff 00 00 00 00 00 01 88 a4 2a 10"
+                    "0c 01 00 00 00 00 0a 80 00 00  de ad be ef 00 00 00 00 00 00  00 00"
+                    "0e 02 01 10 10 09 08 00 00 00  00 00 00 00 00 00 00 00  00 00"));
+  EXPECT_EQ(reply, hex("ff ff ff ff ff ff 02 00 00 00 00 01 88 a4 2a 10"
+                       "0c 01 00 00 00 00 0a 80 00 00  de ad be ef 11 22 33 44 55 66  03 00"
+                       "0e 02 01 10 10 09 08 00 00 00  05 04 03 02 01 00 00 00  01 00"));
+  EXPECT_EQ(line.app(0).last_outputs, (std::vector<uint8_t>{0xDE, 0xAD, 0xBE, 0xEF}));
+}
+
 TEST(Datagrams, FpwrToOtherStationIsIgnored) {
   Line line(1);
   line.master->send(Command::Apwr, 0, 0x0010, bytes16(0x1001));
