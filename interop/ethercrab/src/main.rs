@@ -122,11 +122,11 @@ fn main() -> ExitCode {
     if let Err(e) = outcome {
         report.fail(format!("stopped: {e}"));
     }
+    println!("ran for {:.1} s", started.elapsed().as_secs_f64());
     println!(
-        "{} passed, {} failed ({:.1} s)",
+        "ethercrab-interop: {} passed, {} failed",
         report.passed,
-        report.failures.len(),
-        started.elapsed().as_secs_f64()
+        report.failures.len()
     );
     if report.failures.is_empty() {
         ExitCode::SUCCESS

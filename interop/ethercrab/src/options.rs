@@ -49,8 +49,9 @@ usage: ethercrab-interop --iface IFACE [options]
   --wire OUT:IN[,OUT:IN]   loopback wiring as bit offsets in the SubDevice's output and
                            input images, e.g. 0:0,1:1 or byte.bit form 2.0:6.0
   --no-sync0               keep DC static drift compensation but do not start SYNC0
-  --expect-vendor HEX      expected vendor id (checked against SII and 0x1018:01)
-  --expect-product HEX     expected product code (checked against SII and 0x1018:02)
+  --expect-vendor N        expected vendor id, 0x.. for hex (checked against the SII identity,
+                           which 0x1018 must match)
+  --expect-product N       expected product code, likewise
   --string-object IDX:SUB  writable string for normal/segmented downloads (default 0x2000:04)
   --string-value TEXT      value written there with a normal download (default 10.11.12.13)
   --string-value-segmented TEXT
