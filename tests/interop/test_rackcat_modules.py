@@ -186,3 +186,111 @@ def test_uart_bytes_from_the_pty_arrive_in_rx_object_and_status(rackcat):
         os.close(fd)
         master.close()
     rc.stop()
+
+
+def ack_error_and_init(master, state):
+    """Acknowledges the error flag (AL control bit 4) the way SOEM masters do, then INIT."""
+    s = master.slaves[0]
+    s.state = state | pysoem.STATE_ACK
+    s.write_state()
+    go(master, pysoem.INIT_STATE)
+
+
+def driven_word(rc, master, module):
+    """The levels a digital output card drives now, from the control API (bit n = channel n)."""
+    m = rc.ctl_while_cycling(master, "GET", f"/api/modules/{module}")
+    return sum(int(o["driven"]) << o["channel"] for o in m["outputs"])
+
+
+def test_rim_lost_in_op_with_detect_modules_override_0_goes_to_safeop(rackcat):
+    """Guide Table 23, Detect Modules Override 0: a RIM with mapped process data going offline
+    in OP takes the device to SAFEOP (error flag, AL status code 0x0070) and every output to
+    its safe state; the master also gets the module-missing emergency."""
+    rc = rackcat()
+    master = open_master(rc.iface, 1)
+    try:
+        s = master.slaves[0]
+        emcy = Emergencies()
+        s.add_emergency_callback(emcy)
+        s.sdo_write(0x2000, 0x0B, b"\x00")  # Detect Modules Override = 0 (PREOP)
+        pdo = read_pdo_map(s)
+        do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
+        di = pdo.find(0x6000 + (DI_LOOPBACK_MODULE - 1) * 0x10, 1, "in")
+        do_rim2 = pdo.find(0x7000 + (26 - 1) * 0x10, 1, "out")  # RIM 2 slot 7 CDO-10
+        master.config_map()
+        to_op(master)
+        s.output = set_bits(set_bits(s.output, do, 0x0FF0), do_rim2, 0x00FF)
+        assert wait_loopback(master, do, di, 0x0FF0) == 0x0FF0
+        assert driven_word(rc, master, 26) == 0x00FF
+
+        rc.ctl_while_cycling(master, "POST", "/api/rim/unplug", {"rim": 2})
+        run_cycles(master, 50)
+        master.read_state()
+        assert s.state == pysoem.SAFEOP_STATE | pysoem.STATE_ERROR, hex(s.state)
+        assert s.al_status == 0x0070, hex(s.al_status)
+        # Safe state (0x4nn0 defaults: not enabled -> de-energised) on both RIMs.
+        assert get_bits(s.input, di) == 0, hex(get_bits(s.input, di))
+        assert driven_word(rc, master, 26) == 0
+        assert driven_word(rc, master, DO_MODULE) == 0
+        missing = emcy.wait(s, 0xA001)
+        assert missing[0][2] == 2, missing
+        ack_error_and_init(master, pysoem.SAFEOP_STATE)
+    finally:
+        master.close()
+    rc.stop()
+
+
+def test_sm_watchdog_in_op_drops_to_safeop_with_safe_outputs_and_emergency(rackcat):
+    """The master stops sending process data in OP: after the SM2 watchdog (100 ms default)
+    the device is in SAFEOP with the error flag and AL status code 0x001B, the outputs are in
+    their safe state, and a 0x8110 emergency (process-data timeout) is queued."""
+    rc = rackcat()
+    master = open_master(rc.iface, 1)
+    try:
+        s = master.slaves[0]
+        emcy = Emergencies()
+        s.add_emergency_callback(emcy)
+        pdo = read_pdo_map(s)
+        do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
+        di = pdo.find(0x6000 + (DI_LOOPBACK_MODULE - 1) * 0x10, 1, "in")
+        master.config_map()
+        to_op(master)
+        assert wait_loopback(master, do, di, 0xFFFF) == 0xFFFF
+        time.sleep(0.5)  # no frames: five watchdog periods
+        master.read_state()
+        assert s.state == pysoem.SAFEOP_STATE | pysoem.STATE_ERROR, hex(s.state)
+        assert s.al_status == 0x001B, hex(s.al_status)
+        run_cycles(master, 20)
+        assert get_bits(s.input, di) == 0, "outputs not in their safe state after the watchdog"
+        emcy.wait(s, 0x8110)
+        ack_error_and_init(master, pysoem.SAFEOP_STATE)
+    finally:
+        master.close()
+    rc.stop()
+
+
+def test_uart_bytes_written_by_the_master_leave_on_the_pty(rackcat):
+    """0x5nn7 UART Tx data channel 0: a complete-access write (subindex 0 = count, then the
+    bytes) transmits them; a serial program on the pseudo-terminal reads them."""
+    rc = rackcat()
+    pty = rc.ctl("GET", f"/api/modules/{UART_MODULE}")["uart"][0]["pty"]
+    fd = os.open(pty, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+    master = open_master(rc.iface, 1)
+    try:
+        s = master.slaves[0]
+        tx_obj = 0x5000 + (UART_MODULE - 1) * 0x10 + 7
+        message = b"hello from the master\n"
+        s.sdo_write(tx_obj, 0, bytes([len(message), 0]) + message, ca=True)
+        got = b""
+        deadline = time.monotonic() + 3.0
+        while len(got) < len(message) and time.monotonic() < deadline:
+            try:
+                got += os.read(fd, 256)
+            except BlockingIOError:
+                time.sleep(0.01)
+        assert got == message
+        go(master, pysoem.INIT_STATE)
+    finally:
+        os.close(fd)
+        master.close()
+    rc.stop()
