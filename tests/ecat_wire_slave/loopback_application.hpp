@@ -7,6 +7,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <ctime>
 #include <vector>
 
 #include "ecat/application.hpp"
@@ -16,7 +17,9 @@ namespace rackcat::tests {
 
 class LoopbackApplication final : public ecat::Application {
  public:
-  explicit LoopbackApplication(const TestSiiIdentity& identity) : sii_(build_test_sii(identity)) {}
+  explicit LoopbackApplication(const TestSiiIdentity& identity) : sii_(build_test_sii(identity)) {
+    sync0_times_.reserve(kMaxSyncTimes);  // recorded on the cyclic path: no allocation there
+  }
 
   std::span<const uint8_t> eeprom() const override { return sii_; }
   uint16_t on_state_request(ecat::AlState, ecat::AlState) override { return 0; }
@@ -36,7 +39,14 @@ class LoopbackApplication final : public ecat::Application {
     ++outputs_received_;
   }
   void on_sync(int which, uint64_t) override {
-    if (which == 0) ++sync0_events_;
+    if (which != 0) return;
+    ++sync0_events_;
+    if (sync0_times_.size() < kMaxSyncTimes) {
+      timespec ts{};
+      clock_gettime(CLOCK_MONOTONIC, &ts);
+      sync0_times_.push_back(static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000ull +
+                             static_cast<uint64_t>(ts.tv_nsec));
+    }
   }
   void on_watchdog_expired() override {
     last_outputs_.fill(0);  // safe state
@@ -44,12 +54,16 @@ class LoopbackApplication final : public ecat::Application {
   }
 
   uint64_t sync0_events() const { return sync0_events_; }
+  // CLOCK_MONOTONIC time at which the application saw each SYNC0 (the first kMaxSyncTimes).
+  const std::vector<uint64_t>& sync0_times() const { return sync0_times_; }
   uint64_t outputs_received() const { return outputs_received_; }
   uint64_t watchdog_expiries() const { return watchdog_expiries_; }
   ecat::AlState state() const { return state_; }
 
  private:
+  static constexpr size_t kMaxSyncTimes = 1 << 17;
   std::vector<uint8_t> sii_;
+  std::vector<uint64_t> sync0_times_;
   std::array<uint8_t, kTestProcessDataBytes> last_outputs_{};
   uint64_t sync0_events_ = 0;
   uint64_t outputs_received_ = 0;

@@ -8,6 +8,7 @@
 // Runs until SIGINT/SIGTERM and exits 0, printing what the applications saw (SYNC0 pulses,
 // output updates, watchdog expiries). A missing interface or permission: one line, exit 2.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -26,6 +27,29 @@ TestSiiIdentity identity_at(int position) {
   TestSiiIdentity id;
   id.serial = static_cast<uint32_t>(position + 1);
   return id;
+}
+
+// How regularly SYNC0 reached the application: the deviation of each interval between two
+// pulses from the programmed cycle (the median interval), in µs. Coalesced pulses (a loop that
+// was descheduled) show up as intervals of several cycles.
+void print_sync_jitter(const std::vector<uint64_t>& times) {
+  if (times.size() < 3) return;
+  std::vector<uint64_t> intervals;
+  for (size_t i = 1; i < times.size(); ++i) intervals.push_back(times[i] - times[i - 1]);
+  std::vector<uint64_t> sorted = intervals;
+  std::sort(sorted.begin(), sorted.end());
+  const uint64_t cycle = sorted[sorted.size() / 2];
+  std::vector<uint64_t> dev;
+  for (uint64_t v : intervals) dev.push_back(v > cycle ? v - cycle : cycle - v);
+  std::sort(dev.begin(), dev.end());
+  auto pct = [&](double p) {
+    return static_cast<double>(dev[static_cast<size_t>(p * static_cast<double>(dev.size() - 1))]) /
+           1000.0;
+  };
+  std::printf(
+      "sync0 jitter (slave 0): cycle %.1f us, deviation p50 %.1f us, p99 %.1f us, max %.1f us"
+      " over %zu intervals\n",
+      static_cast<double>(cycle) / 1000.0, pct(0.5), pct(0.99), pct(1.0), dev.size());
 }
 
 }  // namespace
@@ -101,5 +125,6 @@ int main(int argc, char** argv) {
     std::printf(" %llu", static_cast<unsigned long long>(a->watchdog_expiries()));
   }
   std::printf("\n");
+  print_sync_jitter(apps.front()->sync0_times());
   return rc;
 }
