@@ -692,6 +692,41 @@ async fn compare_od_lists<'a>(
     }
 }
 
+/// After the static drift compensation each DC SubDevice behind the reference clock holds in
+/// its System Time Difference (0x092C, ETG.1000.4 §9.1: bit 31 sign, bits 0-30 magnitude in ns)
+/// how far its clock was from the reference time the last FRMW carried. The reference (the
+/// first DC SubDevice) only has its time read, so its 0x092C says nothing and is skipped.
+async fn check_dc_difference<const N: usize, const P: usize>(
+    md: &MainDevice<'_>,
+    group: &ethercrab::SubDeviceGroup<N, P>,
+    r: &mut Report,
+) {
+    let mut diffs = Vec::new();
+    for sd in group.iter(md).filter(|sd| sd.dc_support().any()).skip(1) {
+        match sd.register_read::<u32>(0x092Cu16).await {
+            Ok(v) => {
+                let magnitude = i64::from(v & 0x7FFF_FFFF);
+                diffs.push(if v & 0x8000_0000 != 0 { -magnitude } else { magnitude });
+            }
+            Err(e) => r.fail(format!(
+                "SubDevice {:#06x}: reading DC system time difference 0x092C: {e}",
+                sd.configured_address()
+            )),
+        }
+    }
+    if diffs.is_empty() {
+        return;
+    }
+    let worst = diffs.iter().map(|d| d.abs()).max().unwrap_or(0);
+    r.check(
+        worst <= 10_000,
+        format!(
+            "DC: after static drift compensation the {} SubDevice(s) behind the reference differ from it by at most {worst} ns (0x092C, limit 10 us)",
+            diffs.len()
+        ),
+    );
+}
+
 /// Runs the cyclic exchange `cycles` times, driving and checking the loopback.
 macro_rules! cycle_loop {
     ($group:expr, $md:expr, $o:expr, $r:expr, $checks:expr, $expected_wkc:expr, $txrx:ident, $dc:expr) => {{
@@ -877,6 +912,7 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
         }
     }
     check_states(md, &addrs, SubDeviceState::PreOp, r).await;
+    check_dc_difference(md, &group, r).await;
 
     let mut layouts: Vec<Option<PdoLayout>> = vec![None; group.len()];
     if o.mode == Mode::Rackcat {
