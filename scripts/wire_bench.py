@@ -22,6 +22,10 @@ floor (target: p50 and p99 within 1.3x). Exit status 1 when a ratio is over 1.3.
 
 The slave command is a template ({iface}, {slaves}); --busy-poll is appended in busy-poll
 mode. The same works for `build/rackcat run --iface {iface}`.
+
+With --sync-seconds S (and pysoem installed), each mode also runs the slave with DC SYNC0 at
+1 ms under a pysoem master cycling at 1 ms for S seconds, and prints the SYNC0 jitter line the
+slave reports on exit (ecat_wire_slave prints one; other slaves may not).
 """
 import argparse
 import json
@@ -131,6 +135,35 @@ class Pinger:
         raise RuntimeError(f"{names} did not answer within {timeout_s} s")
 
 
+SYNC_MASTER = r"""
+import sys, time, pysoem
+m = pysoem.Master(); m.open(sys.argv[1])
+if m.config_init() <= 0: sys.exit("no slave")
+m.config_map(); m.config_dc()
+for s in m.slaves: s.dc_sync(True, 1_000_000)
+m.state = pysoem.SAFEOP_STATE; m.write_state(); m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
+m.send_processdata(); m.receive_processdata(20000)
+m.state = pysoem.OP_STATE; m.write_state()
+end = time.monotonic() + float(sys.argv[2])
+while time.monotonic() < end:
+    m.send_processdata(); m.receive_processdata(20000); time.sleep(0.001)
+m.state = pysoem.INIT_STATE; m.write_state(); m.close()
+"""
+
+
+def sync_jitter(command, seconds, tmp):
+    """Runs the slave under a 1 ms pysoem master with SYNC0 at 1 ms; returns its jitter line."""
+    r = Responder("sync", command, tmp)
+    try:
+        time.sleep(0.3)
+        sh("ip", "netns", "exec", NS, sys.executable, "-c", SYNC_MASTER, PAIRS["slave"][1],
+           str(seconds))
+    finally:
+        r.stop()
+    lines = [l for l in r.log_path.read_text().splitlines() if "sync0 jitter" in l]
+    return lines[-1].strip() if lines else "(the slave printed no sync0 jitter line)"
+
+
 def pct(values, p):
     values = sorted(values)
     k = min(len(values) - 1, int(round(p / 100 * (len(values) - 1))))
@@ -148,6 +181,8 @@ def main():
     ap.add_argument("--modes", default="blocking,busy-poll")
     ap.add_argument("--pinger-busy-poll", action="store_true",
                     help="the pinger spins too in busy-poll mode")
+    ap.add_argument("--sync-seconds", type=float, default=0,
+                    help="also measure SYNC0 jitter under a 1 ms pysoem master for S seconds")
     args = ap.parse_args()
     if os.geteuid() != 0:
         sys.exit("wire_bench: needs root (network namespace, veth pairs, raw sockets)")
@@ -206,6 +241,11 @@ def main():
                         finally:
                             r.stop()
             seconds[mode] = time.monotonic() - mode_started
+        jitter = {}
+        if args.sync_seconds > 0:
+            for mode in modes:
+                jitter[mode] = sync_jitter(command("slave", mode == "busy-poll"),
+                                           args.sync_seconds, tmp)
     finally:
         netns_down()
 
@@ -231,6 +271,8 @@ def main():
                       f"{p99:8.1f} {r50:5.2f}x {r99:5.2f}x {lost[(mode, frame, name)]:5d}  "
                       f"{verdict}")
     print("wall time per mode: " + ", ".join(f"{m} {t:.0f} s" for m, t in seconds.items()))
+    for mode, line in jitter.items():
+        print(f"{mode:10s} {line}")
     return 0 if ok else 1
 
 
