@@ -73,7 +73,7 @@ pub fn validate_wires(wires: &[Wire], out_len: usize, in_len: usize) -> Result<(
 /// outputs (byte aligned, in SubDevice order), and sends it in LRW datagrams of `chunk` bytes,
 /// the first one `first_chunk` bytes (shorter when a DC FRMW shares the first frame).
 /// Per datagram each SubDevice adds 1 when its input FMMU is hit and 2 when its output FMMU is
-/// (ETG.1000.4 §5.4.3, LRW), so a SubDevice whose area straddles two datagrams counts twice.
+/// (ETG.1000.4 §5.4.4, LRW), so a SubDevice whose area straddles two datagrams counts twice.
 pub fn expected_lrw_wkc(
     in_lens: &[usize],
     out_lens: &[usize],

@@ -693,7 +693,7 @@ async fn compare_od_lists<'a>(
 }
 
 /// After the static drift compensation each DC SubDevice behind the reference clock holds in
-/// its System Time Difference (0x092C, ETG.1000.4 §9.1: bit 31 sign, bits 0-30 magnitude in ns)
+/// its System Time Difference (0x092C, ETG.1000.4 §9: bit 31 sign, bits 0-30 magnitude in ns)
 /// how far its clock was from the reference time the last FRMW carried. The reference (the
 /// first DC SubDevice) only has its time read, so its 0x092C says nothing and is skipped.
 async fn check_dc_difference<const N: usize, const P: usize>(
@@ -706,7 +706,11 @@ async fn check_dc_difference<const N: usize, const P: usize>(
         match sd.register_read::<u32>(0x092Cu16).await {
             Ok(v) => {
                 let magnitude = i64::from(v & 0x7FFF_FFFF);
-                diffs.push(if v & 0x8000_0000 != 0 { -magnitude } else { magnitude });
+                diffs.push(if v & 0x8000_0000 != 0 {
+                    -magnitude
+                } else {
+                    magnitude
+                });
             }
             Err(e) => r.fail(format!(
                 "SubDevice {:#06x}: reading DC system time difference 0x092C: {e}",
