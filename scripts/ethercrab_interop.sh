@@ -45,6 +45,10 @@ if [ "$(id -u)" -ne 0 ]; then
   echo "ethercrab_interop: SKIPPED: needs root for network namespaces and raw sockets (run as root or under sudo)"
   exit 0
 fi
+# rustup installs cargo under ~/.cargo/bin, which a non-login shell may not have on PATH.
+if ! command -v cargo >/dev/null 2>&1 && [ -x "${CARGO_HOME:-$HOME/.cargo}/bin/cargo" ]; then
+  PATH="${CARGO_HOME:-$HOME/.cargo}/bin:$PATH"
+fi
 for tool in ip cargo; do
   if ! command -v "$tool" >/dev/null 2>&1; then
     echo "ethercrab_interop: FAILED: '$tool' not found (scripts/setup.sh installs it)" >&2
