@@ -228,13 +228,17 @@ SiiImage encode_sii(const DeviceDescription& d) {
   auto txpdo = encode_pdos(d.tx_pdos, strings);
   auto rxpdo = encode_pdos(d.rx_pdos, strings);
 
-  append_category(image, sii::kCatStrings, strings.encode());
+  // Masters walk the categories from word 0x40 and SOEM caches only the first 4 KiB of the
+  // EEPROM (EC_MAXEEPBUF; bytes beyond read as 0xFF, i.e. "End"). The categories a master
+  // needs to configure the slave therefore come first, before the Strings category, which
+  // grows with the rack (ETG.2010 does not fix the order of the categories).
   append_category(image, sii::kCatGeneral, std::move(general));
   if (!fmmu.empty()) append_category(image, sii::kCatFmmu, std::move(fmmu));
   if (!sm.empty()) append_category(image, sii::kCatSyncManager, std::move(sm));
+  if (!dc.empty()) append_category(image, sii::kCatDc, std::move(dc));
+  append_category(image, sii::kCatStrings, strings.encode());
   if (!txpdo.empty()) append_category(image, sii::kCatTxPdo, std::move(txpdo));
   if (!rxpdo.empty()) append_category(image, sii::kCatRxPdo, std::move(rxpdo));
-  if (!dc.empty()) append_category(image, sii::kCatDc, std::move(dc));
   le::put16(image, sii::kCatEnd);
 
   if (image.size() > sii::kMaxBytes) {

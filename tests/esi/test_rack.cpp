@@ -142,6 +142,20 @@ TEST_P(RackEsi, SiiPdoCategoriesListTheAssignedPdosInOrder) {
   }
 }
 
+TEST_P(RackEsi, ConfigurationCategoriesAndDeviceNameLieInSoemsSiiCache) {
+  // SOEM reads SII bytes below EC_MAXEEPBUF = 4096 only; beyond, it sees 0xFF ("End").
+  auto img = build_sii(*device);
+  auto info = parse_sii(img.span());
+  std::set<uint16_t> needed = {30, 40, 41, 10};
+  for (const auto& c : info.categories) {
+    if (!needed.count(c.type)) continue;
+    size_t end = 2u * (c.word_address + 2u) + (c.type == 10 ? 64u : 2u * c.length_words);
+    EXPECT_LE(end, 4096u) << "category " << c.type;
+    needed.erase(c.type);
+  }
+  EXPECT_TRUE(needed.empty());
+}
+
 INSTANTIATE_TEST_SUITE_P(Racks, RackEsi, ::testing::Values("tiny", "default", "modules120"));
 
 TEST(RackModules, OneModulePerIdentWithItsObjectsAndPdos) {

@@ -85,7 +85,9 @@ TEST(SiiImage, HeaderWordsCarryIdentityMailboxAndVersion) {
   EXPECT_EQ(img.bytes.back(), 0xFF);
 }
 
-TEST(SiiImage, CategoriesInSpecOrderEndingWithEnd) {
+// General, FMMU, SyncManager and DC first (inside SOEM's 4 KiB SII cache whatever the rack
+// size), then Strings and the PDO categories, then End.
+TEST(SiiImage, ConfigurationCategoriesFirstThenStringsAndPdosThenEnd) {
   auto img = encode_sii(sample_description());
   std::vector<uint16_t> types;
   size_t w = 0x40;
@@ -93,7 +95,7 @@ TEST(SiiImage, CategoriesInSpecOrderEndingWithEnd) {
     types.push_back(word(img, w));
     w += 2 + word(img, w + 1);
   }
-  EXPECT_EQ(types, (std::vector<uint16_t>{10, 30, 40, 41, 50, 51, 60}));
+  EXPECT_EQ(types, (std::vector<uint16_t>{30, 40, 41, 60, 10, 50, 51}));
 }
 
 TEST(SiiImage, GeneralCategoryCoeDetailsAndStrings) {

@@ -83,10 +83,10 @@ TEST(SiiParser, WrongCrcIsReported) {
 
 TEST(SiiParser, CategoryRunningPastTheEndIsReported) {
   auto img = encode_sii(sample_description());
-  // Declare the Strings category (first, at word 0x40) longer than the whole image.
+  // Declare the General category (first, at word 0x40) longer than the whole image.
   le::store16(img.bytes, 2 * 0x41, static_cast<uint16_t>(img.bytes.size()));
   auto msg = parse_error(img.span());
-  EXPECT_NE(msg.find("Strings category"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("General category"), std::string::npos) << msg;
   EXPECT_NE(msg.find("runs past the end"), std::string::npos) << msg;
 }
 
