@@ -122,10 +122,12 @@ void EventLoop::fire_timers(uint64_t now) {
 int EventLoop::run() {
   // Timer slack widens every sleep by 50 µs by default; SYNC pulses want the exact time.
   prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
-  stop_requested_.store(false, std::memory_order_release);
   stop_signal_ = 0;
   running_.store(true, std::memory_order_relaxed);
+  // A stop() that came before run() ends it at once; it is consumed here so that the loop
+  // can be run again.
   const int rc = options_.wait == WaitMode::BusyPoll ? run_busy_poll() : run_blocking();
+  stop_requested_.store(false, std::memory_order_release);
   running_.store(false, std::memory_order_relaxed);
   if (options_.pcap != nullptr) options_.pcap->flush();
   return rc;

@@ -153,6 +153,16 @@ TEST_P(LinkEventLoop, SigtermStopsTheLoopWithStatusZero) {
   EXPECT_EQ(loop.stop_signal(), SIGTERM);
 }
 
+TEST_P(LinkEventLoop, StopBeforeRunIsNotLost) {
+  RawSocketLink link("lo");
+  EventLoop loop(link, {.wait = GetParam(), .pcap = nullptr, .stop_on_signals = false});
+  loop.stop();
+  EXPECT_EQ(loop.run(), 0);
+  // Consumed: the loop runs again until the next stop().
+  loop.post([&] { loop.stop(); });
+  EXPECT_EQ(loop.run(), 0);
+}
+
 INSTANTIATE_TEST_SUITE_P(BothWaitModes, LinkEventLoop,
                          ::testing::Values(WaitMode::Blocking, WaitMode::BusyPoll),
                          [](const auto& info) {
