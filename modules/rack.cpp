@@ -272,7 +272,19 @@ void Rack::on_exception_reset(mdp::Device&) {
   dirty_ = false;
 }
 
-void Rack::on_detect_modules(mdp::Device&) {
+void Rack::on_detect_modules(mdp::Device& device) {
+  // Guide Table 23: with Detect Modules Override 0 the command enumerates only the cards it
+  // detects now, so the cards of a RIM that is not online leave 0xF050 (mdp filled it with
+  // the whole rack; ETG.5001.1: the detected list holds the modules present, in order).
+  coe::Object* detected = device.dictionary().find(0xF050);
+  if (detected != nullptr && !detect_modules_override()) {
+    uint8_t n = 0;
+    for (const mdp::Module& m : device.config().modules) {
+      if (rim_online(m.rim)) detected->set_u(++n, m.card->module_ident);
+    }
+    for (uint8_t k = n + 1; k <= detected->sub0(); ++k) detected->set_u(k, 0);
+    detected->image()[0] = n;
+  }
   refresh();
 }
 

@@ -121,3 +121,62 @@ def test_ipv4_stored_survives_restart_and_is_read_only_in_op(rackcat, tmp_path):
     finally:
         master.close()
     rc.stop()
+
+
+def detect_modules(slave, timeout_s=5.0):
+    """0xF002 Detect Modules Command: "scan" (0x73 0x63 0x61 0x6E) to :01, poll :02."""
+    slave.sdo_write(0xF002, 1, b"scan")
+    deadline = time.monotonic() + timeout_s
+    while True:
+        status = slave.sdo_read(0xF002, 2)[0]
+        if status != 255:
+            return status
+        assert time.monotonic() < deadline, "0xF002 still executing"
+        time.sleep(0.02)
+
+
+def request_safeop(master):
+    master.state = pysoem.SAFEOP_STATE
+    master.write_state()
+    master.state_check(pysoem.SAFEOP_STATE, 2_000_000)
+    master.read_state()
+    return master.slaves[0]
+
+
+def test_detect_modules_after_rim_loss_and_configured_list(rackcat):
+    """Configured (0xF030) versus detected (0xF050) modules. With Detect Modules Override 0,
+    the Detect Modules command enumerates only the cards it detects now (guide Table 23): RIM
+    2 unplugged -> 0xF050 holds RIM 1's 19 modules, and PREOP -> SAFEOP is refused with AL
+    status code 0x0070 while 0xF030 still lists 27 (ETG.5001.1); back to normal after replug."""
+    rc = rackcat()
+    master = open_master(rc.iface, 1)
+    try:
+        s = master.slaves[0]
+        emergencies = []
+        s.add_emergency_callback(emergencies.append)
+        # A configured list that contradicts the detected one is refused and changes nothing
+        # (guide abort table: 0x06090033 module ident lists do not match).
+        assert abort_code(s.sdo_write, 0xF030, 1, struct.pack("<I", 0x0064D116)) == 0x06090033
+        assert module_list(s, 0xF030) == DEFAULT_IDENTS
+        s.sdo_write(0x2000, 0x0B, b"\x00")  # Detect Modules Override = 0
+
+        rc.ctl("POST", "/api/rim/unplug", {"rim": 2})
+        assert detect_modules(s) in (0, 1)
+        assert module_list(s, 0xF050) == DEFAULT_IDENTS[:19]
+        master.config_map()
+        s = request_safeop(master)
+        assert s.state == pysoem.PREOP_STATE | pysoem.STATE_ERROR, hex(s.state)
+        assert s.al_status == 0x0070, hex(s.al_status)
+        s.state = pysoem.PREOP_STATE | pysoem.STATE_ACK
+        s.write_state()
+        assert master.state_check(pysoem.PREOP_STATE, 2_000_000) == pysoem.PREOP_STATE
+
+        rc.ctl("POST", "/api/rim/replug", {"rim": 2})
+        assert detect_modules(s) in (0, 1)
+        assert module_list(s, 0xF050) == DEFAULT_IDENTS
+        s = request_safeop(master)
+        assert s.state == pysoem.SAFEOP_STATE, (hex(s.state), hex(s.al_status))
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    rc.stop()
