@@ -223,6 +223,7 @@ bool Esc::physical_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge
 
 bool Esc::physical_write(uint16_t address, const uint8_t* src, uint16_t len) {
   if (!sm_allows_write(address, len)) return false;
+  if (write_protection_active()) return protected_write(address, src, len);
   uint16_t done = 0;
   if (address < reg::kProcessRam) {
     done = static_cast<uint16_t>(

@@ -54,7 +54,10 @@ class Esc {
   Esc& operator=(const Esc&) = delete;
 
   // ---- datagram path (called by Segment for every frame passing this ESC) -----------------
-  void begin_frame(const PassTimes& times) { pass_ = times; }
+  void begin_frame(const PassTimes& times) {
+    pass_ = times;
+    register_write_enabled_ = esc_write_enabled_ = false;  // enables last one frame
+  }
   // One datagram passing this ESC: `datagram` points at its 10-byte header, followed by
   // `data_len` data bytes and the 2-byte working counter. Addressing (ADP auto-increment),
   // data and working counter are updated in place per ETG.1000.4 §5.4. The IRQ field is ORed
@@ -143,6 +146,11 @@ class Esc {
   void after_register_write(uint16_t address, const uint8_t* src, uint16_t len);
   void before_register_read(uint16_t address, uint16_t len);
   void after_register_read(uint16_t address, uint16_t len);
+  // write_protection.cpp
+  bool write_protection_active() const;
+  bool write_allowed(uint32_t address) const;
+  void write_enables_written(uint16_t address, const uint8_t* src, uint16_t len);
+  bool protected_write(uint16_t address, const uint8_t* src, uint16_t len);
   // fmmu.cpp: logical addressing.
   uint8_t process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len);
   bool fmmu_read(const FmmuState& f, uint64_t lo_bit, uint64_t hi_bit, uint64_t datagram_bit0,
@@ -199,7 +207,9 @@ class Esc {
   uint8_t fmmu_active_count_ = 0;
 
   bool port1_link_ = false;
-  uint8_t reset_sequence_ = 0;  // 0x0040 'R','E','S' progress
+  uint8_t reset_sequence_ = 0;           // 0x0040 'R','E','S' progress
+  bool register_write_enabled_ = false;  // 0x0020 bit 0 written in the current frame
+  bool esc_write_enabled_ = false;       // 0x0030 bit 0 written in the current frame
 
   // ESM
   AlState state_ = AlState::Init;

@@ -173,6 +173,7 @@ bool Esc::fmmu_write(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_l
   const auto first = static_cast<uint16_t>(s.phys_first);
   const auto plen = static_cast<uint16_t>(s.phys_len);
   if (!sm_allows_write(first, plen)) return false;
+  if (write_protection_active() && !write_allowed(reg::kProcessRam)) return false;  // ESC-wide
   // Registers keep their write masks and side effects: merge into a copy of the current
   // bytes, then write that copy through the register path in chunks.
   std::array<uint8_t, 256> chunk{};
@@ -199,6 +200,12 @@ bool Esc::fmmu_write(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_l
         const uint8_t v = (data[db / 8] >> (db % 8)) & 1;
         uint8_t& t = target[pb / 8 - p];
         t = static_cast<uint8_t>((t & ~(1u << (pb % 8))) | (v << (pb % 8)));
+      }
+    }
+    if (registers && write_protection_active()) {
+      // Register write protection: only the enable registers themselves get through.
+      for (uint32_t i = 0; i < n; ++i) {
+        if (!write_allowed(p + i)) chunk[i] = mem_[p + i];
       }
     }
     if (registers) {

@@ -103,6 +103,7 @@ void Esc::write_registers(uint16_t address, const uint8_t* src, uint16_t len) {
 
 void Esc::after_register_write(uint16_t address, const uint8_t* src, uint16_t len) {
   auto written = [&](uint16_t a) { return src[a - address]; };
+  write_enables_written(address, src, len);
   if (overlaps(address, len, reg::kEscReset, 1)) {
     // ESC reset: 'R', 'E', 'S' written in three consecutive accesses (ESC datasheet 0x0040).
     const uint8_t byte = written(reg::kEscReset);

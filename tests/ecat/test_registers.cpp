@@ -103,3 +103,44 @@ TEST_F(RegisterTest, WatchdogCounterClearsOnWrite) {
 
 }  // namespace
 }  // namespace rackcat::ecat::test
+
+namespace rackcat::ecat::test {
+namespace {
+
+TEST_F(RegisterTest, RegisterWriteProtectionNeedsEnableInTheSameFrame) {
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x0021, 0x01), 1);
+  // Registers are protected, user RAM and process RAM are not.
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x0138, 0x55), 0);
+  EXPECT_EQ(line.master->fprd8(kStation, 0x0138), 0x00);
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x0F80, 0x66), 1);
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x8000, 0x77), 1);
+  // Enable, then write, in one frame.
+  FrameBuilder b;
+  b.add(Command::Fpwr, kStation, 0x0020, {0x01});
+  b.add(Command::Fpwr, kStation, 0x0138, {0x55});
+  const auto r = line.master->send_frame(b);
+  EXPECT_EQ(r[1].wkc, 1);
+  EXPECT_EQ(line.master->fprd8(kStation, 0x0138), 0x55);
+  // The enable lasts one frame only.
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x0138, 0x00), 0);
+  // Switching the protection off needs the enable too: 0x0020 and 0x0021 in one write.
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x0021, 0x00), 0);
+  EXPECT_EQ(line.master->fpwr(kStation, 0x0020, {0x01, 0x00}).wkc, 1);
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x0138, 0x00), 1);
+}
+
+TEST_F(RegisterTest, EscWriteProtectionCoversAllMemory) {
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x0031, 0x01), 1);
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x8000, 0x77), 0);
+  EXPECT_EQ(line.master->fprd8(kStation, 0x8000), 0x00);
+  FrameBuilder b;
+  b.add(Command::Fpwr, kStation, 0x0030, {0x01});
+  b.add(Command::Fpwr, kStation, 0x8000, {0x77});
+  b.add(Command::Fpwr, kStation, 0x0031, {0x00});
+  line.master->send_frame(b);
+  EXPECT_EQ(line.master->fprd8(kStation, 0x8000), 0x77);
+  EXPECT_EQ(line.master->fpwr8(kStation, 0x8001, 0x01), 1);  // protection off again
+}
+
+}  // namespace
+}  // namespace rackcat::ecat::test
