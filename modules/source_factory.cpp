@@ -181,6 +181,8 @@ std::unique_ptr<Source> make_source(std::string_view kind, const SourceParams& p
     if (p.has("frequency")) {
       freq = p.number("frequency");
     } else {
+      if (!p.has("period_s"))
+        throw std::invalid_argument("sine: give 'frequency' (Hz) or 'period_s' (s)");
       const double period = p.number("period_s");
       if (!(period > 0)) throw std::invalid_argument("sine: period_s must be > 0");
       freq = 1.0 / period;

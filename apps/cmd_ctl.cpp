@@ -1,0 +1,266 @@
+// `rackcat ctl [--port P] <command>`: the client of a running rack's fault-injection control
+// API (modules/control_api.hpp, HTTP + JSON on 127.0.0.1). Prints the answer (JSON, or a
+// table for `list`); an invalid request prints the API's reason and exits 2, an unreachable
+// rack exits 1.
+#include <httplib.h>
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "apps/commands.hpp"
+#include "modules/control_api.hpp"
+
+namespace rackcat::apps {
+namespace {
+
+using json = nlohmann::json;
+
+struct CtlOptions {
+  int port = modules::kDefaultControlPort;
+  bool json_output = false;
+  int module = 0;
+  int channel = 0;
+  int rim = 0;
+  double value = 0.0;
+  std::optional<double> value_opt;
+  std::string source;
+  std::vector<std::string> params;
+  bool comm_error = false;
+  std::string state;
+  std::string zone;
+  double rpm = 0.0;
+  double celsius = 0.0;
+  bool now = false;
+  std::string fault;
+  bool open = false;
+  bool close = false;
+  std::optional<double> loop_ohms;
+  std::string text;
+  std::string hex;
+  std::string error;
+  std::string cts;
+};
+
+[[noreturn]] void request(const CtlOptions& o, const std::string& method, const std::string& path,
+                          const json& body, void (*print)(const json&) = nullptr) {
+  httplib::Client cli("127.0.0.1", o.port);
+  cli.set_connection_timeout(2, 0);
+  cli.set_read_timeout(5, 0);
+  auto res = method == "GET" ? cli.Get(path.c_str())
+                             : cli.Post(path.c_str(), body.dump(), "application/json");
+  if (!res) {
+    std::fprintf(stderr,
+                 "rackcat ctl: no rack answers on 127.0.0.1:%d (%s); is `rackcat run` running "
+                 "with its control API?\n",
+                 o.port, httplib::to_string(res.error()).c_str());
+    exit_with(1);
+  }
+  const json answer = json::parse(res->body, nullptr, false);
+  if (res->status >= 400) {
+    const std::string reason = answer.is_object() && answer.contains("error")
+                                   ? answer["error"].get<std::string>()
+                                   : res->body;
+    std::fprintf(stderr, "rackcat ctl: %s\n", reason.c_str());
+    exit_with(res->status >= 500 ? 1 : 2);
+  }
+  if (print != nullptr && !o.json_output && !answer.is_discarded()) {
+    print(answer);
+  } else {
+    std::printf("%s", res->body.c_str());
+  }
+  exit_with(0);
+}
+
+void print_module(const json& m) {
+  std::printf("module %3d  RIM %d slot %2d  %-9s %s\n", m["module"].get<int>(), m["rim"].get<int>(),
+              m["slot"].get<int>(), m["card"].get<std::string>().c_str(),
+              m["description"].get<std::string>().c_str());
+  for (const auto& c : m["outputs"]) {
+    std::printf("    out%-2d driven %-8g wire %-8g code 0x%04X %s%s\n", c["channel"].get<int>(),
+                c["driven"].get<double>(), c["wire"].get<double>(), c["code"].get<unsigned>(),
+                c["unit"].get<std::string>().c_str(),
+                c.contains("wiring_fault") && c["wiring_fault"] != "none"
+                    ? ("  wiring fault: " + c["wiring_fault"].get<std::string>()).c_str()
+                    : "");
+  }
+  for (const auto& c : m["inputs"]) {
+    std::printf("    in%-3d %-10.4g %-5s code 0x%04X  %s%s\n", c["channel"].get<int>(),
+                c["value"].get<double>(), c["unit"].get<std::string>().c_str(),
+                c["code"].get<unsigned>(), c["source"].get<std::string>().c_str(),
+                c.value("open", false) ? "  OPEN" : "");
+  }
+  if (m.contains("uart")) {
+    for (const auto& u : m["uart"]) {
+      std::printf(
+          "    uart%d %-12s %6d Bd %d%c%d  status %s  errors %s\n", u["channel"].get<int>(),
+          u["pty"].get<std::string>().empty() ? "(no pty)" : u["pty"].get<std::string>().c_str(),
+          u["baud"].get<int>(), u["data_bits"].get<int>(),
+          u["parity"] == "none" ? 'N' : (u["parity"] == "even" ? 'E' : 'O'),
+          u["stop_bits"].get<int>(), u["status"].get<std::string>().c_str(),
+          u["errors"].get<std::string>().c_str());
+    }
+  }
+}
+
+void print_rack(const json& r) {
+  std::printf(
+      "ESM %s  outputs %s  detect modules override %d  CPU %.1f degC (published %.1f)  "
+      "CPU fan %.0f rpm\n",
+      r["esm"].get<std::string>().c_str(), r["outputs_valid"].get<bool>() ? "valid" : "not driven",
+      r["detect_modules_override"].get<bool>() ? 1 : 0, r["cpu_temperature"].get<double>(),
+      r["cpu_temperature_published"].get<double>(), r["cpu_fan_rpm"].get<double>());
+  for (const auto& rim : r["rims"]) {
+    std::printf("RIM %d %s%s  fans: power supply %s, slot card %s\n", rim["rim"].get<int>(),
+                rim["state"].get<std::string>().c_str(),
+                rim["comm_error"].get<bool>() ? " (communication error)" : "",
+                rim["power_supply_fan"].get<bool>()
+                    ? std::to_string(rim["power_supply_rpm"].get<int>()).c_str()
+                    : "none",
+                rim["slot_card_fan"].get<bool>()
+                    ? std::to_string(rim["slot_card_rpm"].get<int>()).c_str()
+                    : "none");
+  }
+  for (const auto& m : r["modules"]) print_module(m);
+}
+
+void add_ctl(CLI::App& app) {
+  auto o = std::make_shared<CtlOptions>();
+  CLI::App* ctl = app.add_subcommand(
+      "ctl", "inspect a running rack and inject faults through its control API (127.0.0.1)");
+  ctl->add_option("--port", o->port, "control API port")->capture_default_str();
+  ctl->require_subcommand(1);
+
+  CLI::App* list = ctl->add_subcommand("list", "RIMs, modules and channels with live values");
+  list->add_option("--module", o->module, "only this module (1..255)");
+  list->add_flag("--json", o->json_output, "print the JSON answer");
+  list->callback([o] {
+    if (o->module > 0)
+      request(*o, "GET", "/api/modules/" + std::to_string(o->module), {}, print_module);
+    request(*o, "GET", "/api/rack", {}, print_rack);
+  });
+
+  ctl->add_subcommand("esm", "the EtherCAT state and whether outputs are driven")->callback([o] {
+    request(*o, "GET", "/api/esm", {});
+  });
+  ctl->add_subcommand("exceptions", "event status and the exception tree 0xF380..0xF398")
+      ->callback([o] { request(*o, "GET", "/api/exceptions", {}); });
+
+  CLI::App* set = ctl->add_subcommand("set", "set an input channel's value or signal source");
+  set->add_option("--module", o->module, "module number")->required();
+  set->add_option("--channel", o->channel, "input channel (0-based)")->required();
+  auto* value = set->add_option("--value", o->value_opt, "a constant value (V, degC or 0/1)");
+  auto* source = set->add_option("--source", o->source,
+                                 "constant, ramp, sine, noise, replay, loopback or plant");
+  value->excludes(source);
+  set->add_option("--param", o->params, "source parameter key=value (repeatable)")->needs(source);
+  set->callback([o] {
+    json body{{"module", o->module}, {"channel", o->channel}};
+    if (o->value_opt) {
+      body["value"] = *o->value_opt;
+    } else if (!o->source.empty()) {
+      body["source"] = o->source;
+      json p = json::object();
+      for (const std::string& kv : o->params) {
+        const auto eq = kv.find('=');
+        if (eq == std::string::npos || eq == 0) {
+          std::fprintf(stderr, "rackcat ctl: --param needs key=value, got '%s'\n", kv.c_str());
+          exit_with(2);
+        }
+        p[kv.substr(0, eq)] = kv.substr(eq + 1);
+      }
+      body["params"] = p;
+    } else {
+      std::fprintf(stderr, "rackcat ctl set: give --value or --source\n");
+      exit_with(2);
+    }
+    request(*o, "POST", "/api/channel", body, print_module);
+  });
+
+  CLI::App* unplug = ctl->add_subcommand("unplug", "take a RIM offline (cable pulled)");
+  unplug->add_option("--rim", o->rim, "RIM number 1..5")->required();
+  unplug->add_flag("--comm-error", o->comm_error, "offline through a communication error");
+  unplug->callback([o] {
+    request(*o, "POST", "/api/rim/unplug", {{"rim", o->rim}, {"comm_error", o->comm_error}});
+  });
+  CLI::App* replug = ctl->add_subcommand("replug", "bring a RIM back online");
+  replug->add_option("--rim", o->rim, "RIM number 1..5")->required();
+  replug->callback([o] { request(*o, "POST", "/api/rim/replug", {{"rim", o->rim}}); });
+  CLI::App* rim_state = ctl->add_subcommand("rim-state", "set a RIM's communication state");
+  rim_state->add_option("--rim", o->rim, "RIM number 1..5")->required();
+  rim_state->add_option("--state", o->state, "offline, connected, online or error")->required();
+  rim_state->add_flag("--comm-error", o->comm_error, "with a communication error");
+  rim_state->callback([o] {
+    request(*o, "POST", "/api/rim/state",
+            {{"rim", o->rim}, {"state", o->state}, {"comm_error", o->comm_error}});
+  });
+
+  CLI::App* fan = ctl->add_subcommand("fan", "set a fan's RPM (nominal 3000)");
+  fan->add_option("--rim", o->rim, "RIM number, 0 = control module CPU fan")->required();
+  fan->add_option("--zone", o->zone, "cpu, power_supply or slot_card");
+  fan->add_option("--rpm", o->rpm, "revolutions per minute")->required();
+  fan->callback([o] {
+    json body{{"rim", o->rim}, {"rpm", o->rpm}};
+    if (!o->zone.empty()) body["zone"] = o->zone;
+    request(*o, "POST", "/api/fan", body);
+  });
+
+  CLI::App* cpu = ctl->add_subcommand("cpu-temp", "set the CPU zone temperature (0x2000:0F)");
+  cpu->add_option("--celsius", o->celsius, "degrees Celsius")->required();
+  cpu->add_flag("--now", o->now, "publish now instead of at the next 30 s update");
+  cpu->callback([o] {
+    request(*o, "POST", "/api/cpu_temperature", {{"celsius", o->celsius}, {"immediate", o->now}});
+  });
+
+  CLI::App* wf = ctl->add_subcommand("wiring-fault", "force a wiring fault on a sourcing output");
+  wf->add_option("--module", o->module, "module number")->required();
+  wf->add_option("--channel", o->channel, "output channel (0-based)")->required();
+  wf->add_option("--fault", o->fault, "none, safe (wire reads low) or unsafe (wire reads high)")
+      ->required();
+  wf->callback([o] {
+    request(*o, "POST", "/api/wiring_fault",
+            {{"module", o->module}, {"channel", o->channel}, {"fault", o->fault}});
+  });
+
+  CLI::App* sensor = ctl->add_subcommand("sensor", "open/close a thermocouple or RTD, loop ohms");
+  sensor->add_option("--module", o->module, "module number")->required();
+  sensor->add_option("--channel", o->channel, "input channel (0-based)")->required();
+  auto* open = sensor->add_flag("--open", o->open, "break the sensor wire");
+  sensor->add_flag("--close", o->close, "repair it")->excludes(open);
+  sensor->add_option("--loop-ohms", o->loop_ohms, "thermocouple loop resistance (0x5nn4)");
+  sensor->callback([o] {
+    json body{{"module", o->module}, {"channel", o->channel}};
+    if (o->open || o->close) body["open"] = o->open;
+    if (o->loop_ohms) body["loop_ohms"] = *o->loop_ohms;
+    request(*o, "POST", "/api/sensor", body, print_module);
+  });
+
+  CLI::App* uart = ctl->add_subcommand("uart", "inject received bytes or line errors");
+  uart->add_option("--module", o->module, "UART module number")->required();
+  uart->add_option("--channel", o->channel, "channel 0..3")->required();
+  uart->add_option("--text", o->text, "bytes as text");
+  uart->add_option("--hex", o->hex, "bytes as hex, e.g. 0d0a");
+  uart->add_option("--error", o->error, "overflow, framing, parity or tx_overflow");
+  uart->add_option("--cts", o->cts, "CTS from the slot card: true or false");
+  uart->callback([o] {
+    json body{{"module", o->module}, {"channel", o->channel}};
+    if (!o->text.empty()) body["text"] = o->text;
+    if (!o->hex.empty()) body["hex"] = o->hex;
+    if (!o->error.empty()) body["error"] = o->error;
+    if (!o->cts.empty()) {
+      if (o->cts != "true" && o->cts != "false") {
+        std::fprintf(stderr, "rackcat ctl uart: --cts must be true or false\n");
+        exit_with(2);
+      }
+      body["cts"] = o->cts == "true";
+    }
+    request(*o, "POST", "/api/uart/inject", body, print_module);
+  });
+}
+
+const CommandRegistrar reg{"ctl", add_ctl};
+
+}  // namespace
+}  // namespace rackcat::apps
