@@ -86,6 +86,7 @@ struct Device::Impl {
     std::vector<uint8_t> response;
     std::vector<uint8_t> payload;  // 0xFBF4: the parameters to apply
     bool factory = false;          // 0xFBF0
+    bool executed = false;         // the write carried a command (not a write-back)
   } pending;
 
   template <class F>
@@ -139,7 +140,9 @@ struct Device::Impl {
     }
   }
 
-  void finish_command(Object& obj, std::span<const uint8_t> capabilities) {
+  // Status, response, and subindex 1 back to its read value (the capability bytes, or zeros), so
+  // the image never holds a command sequence and a complete-access write-back executes nothing.
+  void finish_command(Object& obj) {
     obj.set_u(2, pending.status);
     auto resp = obj.bytes(3);
     std::fill(resp.begin(), resp.end(), 0);
@@ -147,10 +150,13 @@ struct Device::Impl {
     for (size_t i = 0; i < pending.response.size() && i + 2 < resp.size(); ++i) {
       resp[i + 2] = pending.response[i];
     }
-    if (!capabilities.empty()) {
-      auto cmd = obj.bytes(1);
-      std::copy_n(capabilities.begin(), std::min(cmd.size(), capabilities.size()), cmd.begin());
-    }
+    restore_command(obj);
+  }
+  static void restore_command(Object& obj) {
+    const auto& def = obj.entry(1)->default_value;
+    auto cmd = obj.bytes(1);
+    std::fill(cmd.begin(), cmd.end(), 0);
+    std::copy_n(def.begin(), std::min(cmd.size(), def.size()), cmd.begin());
   }
 
   // Sets status "error" on a command object whose execution failed (the write is refused).
@@ -178,11 +184,19 @@ struct Device::Impl {
           subindex == 1    ? data
           : subindex == -1 ? data.subspan(obj.entry(1)->bit_offset / 8, obj.entry(1)->byte_length())
                            : std::span<const uint8_t>{};
-      if (cmd_bytes.empty()) return AbortCode::None;
+      // A complete access writing back what it read (the builder's check lets that pass)
+      // carries no command.
+      const auto current = obj.bytes(1);
+      if (cmd_bytes.empty() || (subindex == -1 && std::equal(cmd_bytes.begin(), cmd_bytes.end(),
+                                                             current.begin(), current.end()))) {
+        return AbortCode::None;
+      }
+      pending.executed = true;
       return execute(cmd_bytes);
     };
-    o->hooks.after_write = [apply](Object& obj, int subindex) {
-      if (subindex == 1 || subindex == -1) apply(obj);
+    o->hooks.after_write = [this, apply](Object& obj, int) {
+      if (pending.executed) apply(obj);
+      pending.executed = false;
     };
   }
 
@@ -238,8 +252,9 @@ void Device::Impl::install_hooks() {
 
   // 0xF002 Detect Modules: the detected list becomes the configured rack, then drivers remove
   // what is offline (modules/, Detect Modules Override).
-  od.find(0xF002)->hooks.after_write = [this](Object& obj, int subindex) {
-    if (subindex != 1 && subindex != -1) return;
+  od.find(0xF002)->hooks.after_write = [this](Object& obj, int) {
+    const auto c = obj.bytes(1);
+    if (!std::equal(c.begin(), c.end(), cmd::kScan.begin(), cmd::kScan.end())) return;
     if (Object* detected = od.find(0xF050)) {
       detected->image()[0] = static_cast<uint8_t>(config.modules.size());
       for (const auto& m : config.modules) {
@@ -248,6 +263,7 @@ void Device::Impl::install_hooks() {
     }
     notify([&](CycleListener& l) { l.on_detect_modules(*self); });
     obj.set_u(2, cmd::kStatusDoneNoResponse);
+    restore_command(obj);
   };
 
   // 0xFBF0 device / factory reset.
@@ -278,7 +294,7 @@ void Device::Impl::install_hooks() {
         clear_latched();
         notify([&](CycleListener& l) { l.on_exception_reset(*self); });
         pending.status = cmd::kStatusDoneNoResponse;
-        finish_command(obj, {});
+        finish_command(obj);
       });
   // 0xFBF2 store: the snapshot is taken now, written by the worker (status 255 until done).
   command_hooks(
@@ -288,7 +304,7 @@ void Device::Impl::install_hooks() {
         pending.status = cmd::kStatusExecuting;
         return AbortCode::None;
       },
-      [this](Object& obj) { finish_command(obj, cmd::kStoreCapabilities); });
+      [this](Object& obj) { finish_command(obj); });
   od.find(0xFBF2)->hooks.before_read = [this](Object& obj, int) {
     if (obj.get_u(2) != cmd::kStatusExecuting || writer->busy()) return;
     const auto error = writer->last_error();
@@ -315,7 +331,7 @@ void Device::Impl::install_hooks() {
         pending.status = cmd::kStatusDoneWithResponse;
         return AbortCode::None;
       },
-      [this](Object& obj) { finish_command(obj, cmd::kChecksumCapabilities); });
+      [this](Object& obj) { finish_command(obj); });
   // 0xFBF4 load: the stored file, or the shipped defaults when nothing is stored.
   command_hooks(
       0xFBF4,
@@ -336,7 +352,7 @@ void Device::Impl::install_hooks() {
       [this](Object& obj) {
         params->apply(pending.payload);
         image->compile();
-        finish_command(obj, cmd::kLoadCapabilities);
+        finish_command(obj);
         notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
       });
 }

@@ -110,6 +110,31 @@ TEST_F(Commands, StoreFailureIsReportedInTheStatus) {
   std::filesystem::remove(dir);
 }
 
+TEST_F(Commands, CompleteAccessWriteBackOfACommandObjectExecutesNothing) {
+  struct L : CycleListener {
+    int resets = 0;
+    void on_device_reset(Device&, bool) override { ++resets; }
+  } l;
+  device->add_listener(&l);
+  ASSERT_EQ(sdo->write_text(0x2000, 0x04, "10.0.0.20"), 0u);
+  for (uint16_t index : {0xFBF0, 0xFBF1, 0xFBF2, 0xFBF3, 0xFBF4}) {
+    std::vector<uint8_t> image;
+    ASSERT_EQ(sdo->upload(index, 0, image, true), 0u) << std::hex << index;
+    EXPECT_EQ(sdo->download(index, 0, image, true), 0u) << std::hex << index;
+  }
+  EXPECT_EQ(l.resets, 0);
+  EXPECT_EQ(sdo->read_text(0x2000, 0x04), "10.0.0.20");
+  EXPECT_FALSE(std::filesystem::exists(device->parameter_file()));
+  // A complete access carrying the command does execute it.
+  std::vector<uint8_t> image;
+  ASSERT_EQ(sdo->upload(0xFBF0, 0, image, true), 0u);
+  std::copy(kDeviceReset.begin(), kDeviceReset.end(), image.begin() + 2);
+  EXPECT_EQ(sdo->download(0xFBF0, 0, image, true), 0u);
+  EXPECT_EQ(l.resets, 1);
+  EXPECT_EQ(sdo->read_text(0x2000, 0x04), "192.168.9.50");
+  device->remove_listener(&l);
+}
+
 TEST_F(Commands, WrongCommandBytesAreIncompatibleAndChangeNothing) {
   EXPECT_EQ(sdo->download(0xFBF2, 1, std::vector<uint8_t>{0x73, 0x61, 0x76, 0x66}), kIncompatible);
   EXPECT_FALSE(std::filesystem::exists(device->parameter_file()));

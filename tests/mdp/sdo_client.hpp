@@ -50,7 +50,7 @@ class SdoClient {
     const std::vector<uint8_t> reply = exchange(sdo);
     if (reply.size() < 4) return 0xFFFFFFFF;
     if (reply[0] == 0x80) return abort_code(reply);
-    EXPECT_EQ(reply[0], 0x60) << "download response";
+    EXPECT_EQ(reply[0] & 0xEF, 0x60) << "download response (bit 4 echoes complete access)";
     return 0;
   }
 
