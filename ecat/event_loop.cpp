@@ -1,10 +1,8 @@
 #include "ecat/event_loop.hpp"
 
 #include <poll.h>
-#include <pthread.h>
 #include <sys/eventfd.h>
 #include <sys/prctl.h>
-#include <sys/signalfd.h>
 #include <unistd.h>
 #include <algorithm>
 #include <cerrno>
@@ -16,17 +14,26 @@
 namespace rackcat::ecat {
 namespace {
 
-// How often the busy-poll loop looks at signals, and how often the pcap buffer is written
-// out while frames flow (so a killed process still leaves a useful capture).
+// How often the busy-poll loop looks at the capture flush deadline, and how often the pcap
+// buffer is written out while frames flow (so a killed process still leaves a capture).
 constexpr uint64_t kHousekeepingNs = 1'000'000;
 constexpr uint64_t kPcapFlushNs = 1'000'000'000;
 
-sigset_t stop_signals() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGINT);
-  sigaddset(&set, SIGTERM);
-  return set;
+// Shared with the signal handler: only lock-free atomics and write(2), which are
+// async-signal-safe.
+std::atomic<int> g_stop_signal{0};
+std::atomic<int> g_wake_fd{-1};
+static_assert(std::atomic<int>::is_always_lock_free);
+
+void on_stop_signal(int sig) {
+  const int saved_errno = errno;
+  g_stop_signal.store(sig, std::memory_order_release);
+  const int fd = g_wake_fd.load(std::memory_order_acquire);
+  if (fd >= 0) {
+    const uint64_t one = 1;
+    (void)!::write(fd, &one, sizeof(one));
+  }
+  errno = saved_errno;
 }
 
 }  // namespace
@@ -37,22 +44,22 @@ uint64_t monotonic_ns() {
   return static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<uint64_t>(ts.tv_nsec);
 }
 
-void EventLoop::block_stop_signals() {
-  sigset_t set = stop_signals();
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+void EventLoop::install_stop_signal_handler() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  // SA_RESTART: other threads' blocking calls carry on; the loop is woken by the eventfd.
+  sa.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
 }
 
 EventLoop::EventLoop(RawSocketLink& link, Options options) : link_(link), options_(options) {
   event_fd_ = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
   if (event_fd_ < 0) throw std::runtime_error("event loop: eventfd failed");
   if (options_.stop_on_signals) {
-    block_stop_signals();
-    sigset_t set = stop_signals();
-    signal_fd_ = signalfd(-1, &set, SFD_NONBLOCK | SFD_CLOEXEC);
-    if (signal_fd_ < 0) {
-      ::close(event_fd_);
-      throw std::runtime_error("event loop: signalfd failed");
-    }
+    install_stop_signal_handler();
+    g_wake_fd.store(event_fd_, std::memory_order_release);
   }
   // Posted work is rare; reserving keeps the loop-side swap from allocating.
   posted_.reserve(16);
@@ -60,7 +67,10 @@ EventLoop::EventLoop(RawSocketLink& link, Options options) : link_(link), option
 }
 
 EventLoop::~EventLoop() {
-  if (signal_fd_ >= 0) ::close(signal_fd_);
+  if (options_.stop_on_signals) {
+    int expected = event_fd_;
+    g_wake_fd.compare_exchange_strong(expected, -1, std::memory_order_acq_rel);
+  }
   if (event_fd_ >= 0) ::close(event_fd_);
 }
 
@@ -92,16 +102,13 @@ void EventLoop::run_posted() {
   running_posted_.clear();
 }
 
-bool EventLoop::drain_signals() {
-  if (signal_fd_ < 0) return false;
-  signalfd_siginfo info{};
-  bool stop = false;
-  while (::read(signal_fd_, &info, sizeof(info)) == static_cast<ssize_t>(sizeof(info))) {
-    stop_signal_ = static_cast<int>(info.ssi_signo);
-    stop = true;
-  }
-  if (stop) stop_requested_.store(true, std::memory_order_release);
-  return stop;
+bool EventLoop::take_stop_signal() {
+  if (!options_.stop_on_signals) return false;
+  const int sig = g_stop_signal.exchange(0, std::memory_order_acq_rel);
+  if (sig == 0) return false;
+  stop_signal_ = sig;
+  stop_requested_.store(true, std::memory_order_release);
+  return true;
 }
 
 void EventLoop::handle_frame(std::span<uint8_t> frame) {
@@ -134,11 +141,10 @@ int EventLoop::run() {
 }
 
 int EventLoop::run_blocking() {
-  pollfd fds[3] = {{link_.fd(), POLLIN, 0}, {event_fd_, POLLIN, 0}, {signal_fd_, POLLIN, 0}};
-  const nfds_t nfds = signal_fd_ >= 0 ? 3 : 2;
+  pollfd fds[2] = {{link_.fd(), POLLIN, 0}, {event_fd_, POLLIN, 0}};
   uint64_t next_flush = monotonic_ns() + kPcapFlushNs;
   // Posts and signals that arrived before run() are handled on the first pass.
-  if (drain_signals()) return 0;
+  if (take_stop_signal()) return 0;
   run_posted();
   while (!stop_requested_.load(std::memory_order_acquire)) {
     uint64_t now = monotonic_ns();
@@ -159,12 +165,12 @@ int EventLoop::run_blocking() {
       timeout.tv_nsec = static_cast<long>(wait % 1'000'000'000ull);
       timeout_ptr = &timeout;
     }
-    const int ready = ::ppoll(fds, nfds, timeout_ptr, nullptr);
+    const int ready = ::ppoll(fds, 2, timeout_ptr, nullptr);
     if (ready < 0) {
       if (errno == EINTR) continue;
       return 1;
     }
-    if ((fds[0].revents | fds[1].revents | fds[2].revents) & POLLNVAL) return 1;
+    if ((fds[0].revents | fds[1].revents) & POLLNVAL) return 1;
     if (ready == 0) continue;
     // One frame per wake-up: if more are queued ppoll returns at once, and we save the
     // receive call that would only report "empty".
@@ -174,8 +180,10 @@ int EventLoop::run_blocking() {
       const auto frame = link_.try_receive();
       if (!frame.empty()) handle_frame(frame);
     }
-    if (fds[1].revents & POLLIN) run_posted();
-    if (nfds > 2 && (fds[2].revents & POLLIN) && drain_signals()) break;
+    if (fds[1].revents & POLLIN) {
+      run_posted();
+      if (take_stop_signal()) break;
+    }
   }
   return 0;
 }
@@ -201,9 +209,9 @@ int EventLoop::run_busy_poll() {
       run_posted();
       if (timers_ != nullptr) deadline = timers_->next_deadline_ns();
     }
+    if (g_stop_signal.load(std::memory_order_relaxed) != 0 && take_stop_signal()) break;
     if (now >= next_housekeeping) {
       next_housekeeping = now + kHousekeepingNs;
-      if (drain_signals()) break;
       if (options_.pcap != nullptr && now >= next_flush) {
         options_.pcap->flush();
         next_flush = now + kPcapFlushNs;

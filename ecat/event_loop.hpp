@@ -6,8 +6,12 @@
 //
 // Other threads (a control API) run code on the loop thread with post(); SIGINT and SIGTERM
 // end run() cleanly with status 0. Two wait modes (WaitMode): Blocking sleeps in ppoll() on
-// the socket, an eventfd for post()/stop(), a signalfd, and the next timer deadline as the
-// timeout; BusyPoll spins on non-blocking receives and checks the clock between them.
+// the socket and an eventfd (post(), stop(), signals) with the next timer deadline as the
+// timeout; BusyPoll spins on non-blocking receives and checks the clock and flags between them.
+//
+// Signals: a SIGINT/SIGTERM handler (SA_RESTART) records the signal and wakes the loop through
+// its eventfd. Whichever thread the kernel picks to run it, the process is not killed, so
+// threads started before the loop (with any signal mask) are harmless.
 //
 // The cyclic path allocates nothing: the frame is the link's fixed buffer, the handlers are
 // set once, and post() allocates only on the posting thread.
@@ -54,10 +58,11 @@ class EventLoop {
     bool stop_on_signals = true;  // SIGINT/SIGTERM end run()
   };
 
-  // Blocks SIGINT and SIGTERM in the calling thread so that they are delivered through the
-  // loop's signalfd. Call it in main() before starting other threads (they inherit the mask);
-  // the constructor calls it for the constructing thread too.
-  static void block_stop_signals();
+  // Installs the SIGINT/SIGTERM handler. From then on such a signal no longer kills the
+  // process: it is remembered and ends the next (or current) run() of the loop constructed
+  // with stop_on_signals. Call it early (the Runner does, before opening anything) so a signal
+  // during start-up is not lost; the constructor calls it too. Idempotent.
+  static void install_stop_signal_handler();
 
   EventLoop(RawSocketLink& link, Options options);
   ~EventLoop();
@@ -82,7 +87,7 @@ class EventLoop {
  private:
   void handle_frame(std::span<uint8_t> frame);
   void run_posted();
-  bool drain_signals();  // true when a stop signal arrived
+  bool take_stop_signal();  // true when a stop signal arrived (and records it)
   void fire_timers(uint64_t now);
   int run_blocking();
   int run_busy_poll();
@@ -92,7 +97,6 @@ class EventLoop {
   FrameHandler on_frame_;
   TimerSource* timers_ = nullptr;
   int event_fd_ = -1;
-  int signal_fd_ = -1;
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> posted_pending_{false};
   std::atomic<bool> running_{false};

@@ -22,7 +22,7 @@ Runner::Runner(RunnerOptions options) : options_(std::move(options)) {}
 Runner::~Runner() = default;
 
 int Runner::open(const char* program, FILE* err) {
-  EventLoop::block_stop_signals();
+  EventLoop::install_stop_signal_handler();
   try {
     link_ = std::make_unique<RawSocketLink>(options_.interface_name);
   } catch (const LinkError& e) {

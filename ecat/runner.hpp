@@ -53,8 +53,8 @@ class Runner {
 
   // Opens link and capture and drops privileges. Returns 0, or prints one line
   // "<program>: <reason>" to `err` and returns the exit code (2 for a missing interface,
-  // missing permission, capture file or user problem). SIGINT/SIGTERM are blocked from here
-  // on and handled by the loop, so a signal during start-up still ends run() cleanly.
+  // missing permission, capture file or user problem). SIGINT/SIGTERM are caught from here on
+  // and end run() cleanly, also when they arrive during start-up.
   int open(const char* program = "rackcat", FILE* err = stderr);
 
   // Runs the segment until SIGINT/SIGTERM or loop().stop(); returns 0 on a clean stop, 1 if

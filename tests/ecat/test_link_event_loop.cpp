@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <fstream>
 #include <iterator>
@@ -147,10 +148,35 @@ TEST_P(LinkEventLoop, TimerSourceFiresAtItsDeadlineNotBefore) {
 TEST_P(LinkEventLoop, SigtermStopsTheLoopWithStatusZero) {
   RawSocketLink link("lo");
   EventLoop loop(link, {.wait = GetParam(), .pcap = nullptr, .stop_on_signals = true});
-  // The signal is blocked in this (only) thread and read from the loop's signalfd.
   loop.post([] { kill(getpid(), SIGTERM); });
   EXPECT_EQ(loop.run(), 0);
   EXPECT_EQ(loop.stop_signal(), SIGTERM);
+}
+
+TEST_P(LinkEventLoop, SigintReceivedByAnotherThreadStillStopsTheLoop) {
+  // A thread started before the loop (a device's background writer, say) with SIGINT not
+  // blocked: the kernel may run the handler there; the process must not die of it.
+  RawSocketLink link("lo");
+  EventLoop loop(link, {.wait = GetParam(), .pcap = nullptr, .stop_on_signals = true});
+  std::atomic<bool> done{false};
+  std::thread other([&] {
+    sigset_t only_int;
+    sigemptyset(&only_int);
+    sigaddset(&only_int, SIGINT);
+    pthread_sigmask(SIG_UNBLOCK, &only_int, nullptr);
+    while (!done.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  });
+  // The loop thread blocks SIGINT for this test, so the kernel must deliver it to `other`.
+  sigset_t only_int;
+  sigemptyset(&only_int);
+  sigaddset(&only_int, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &only_int, nullptr);
+  loop.post([] { kill(getpid(), SIGINT); });
+  EXPECT_EQ(loop.run(), 0);
+  EXPECT_EQ(loop.stop_signal(), SIGINT);
+  done.store(true);
+  other.join();
+  pthread_sigmask(SIG_UNBLOCK, &only_int, nullptr);
 }
 
 TEST_P(LinkEventLoop, StopBeforeRunIsNotLost) {
