@@ -1,0 +1,180 @@
+"""[reliability] What `rackcat run` exposes: it keeps no privilege once its raw socket is open,
+its control API cannot be reached from the EtherCAT wire, and nothing that arrives over the wire
+or from its files makes it write outside its state directory.
+
+Needs root (network namespace, veth, raw sockets); skips with a message otherwise.
+"""
+import os
+import pwd
+import socket
+import struct
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import proc_status
+from rackcat_helpers import CONTROL_PORT, STORE_SAVE, go, open_master, pysoem, rackcat
+
+assert rackcat  # the fixture, imported for pytest
+
+
+def check_no_capabilities(pid):
+    st = proc_status(pid)
+    assert st["Name"].startswith("rackcat"), st["Name"]
+    for key in ("CapEff", "CapPrm", "CapInh", "CapAmb"):
+        assert int(st[key], 16) == 0, f"{key} = {st[key]}"
+    assert int(st["CapBnd"], 16) == 0, f"bounding set not emptied: {st['CapBnd']}"
+    assert st["NoNewPrivs"] == "1"
+    return st
+
+
+def test_no_capabilities_after_socket_open_and_user_switch(rackcat, tmp_path):
+    # As root without --user (and no SUDO_UID): uid stays, every capability is gone.
+    env_sudo = os.environ.pop("SUDO_UID", None)
+    try:
+        rc = rackcat(pcap=False)
+    finally:
+        if env_sudo is not None:
+            os.environ["SUDO_UID"] = env_sudo
+    check_no_capabilities(rc.proc.proc.pid)
+    master = open_master(rc.iface, 1)  # the socket still works without CAP_NET_RAW
+    try:
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    rc.stop()
+
+    # --user nobody: real, effective, saved and filesystem uid and gid all switched.
+    nobody = pwd.getpwnam("nobody")
+    state = tmp_path / "nobody-state"
+    state.mkdir()
+    os.chown(state, nobody.pw_uid, nobody.pw_gid)
+    rc = rackcat(pcap=False, state_dir=state, extra=("--user", "nobody"))
+    st = check_no_capabilities(rc.proc.proc.pid)
+    assert st["Uid"].split() == [str(nobody.pw_uid)] * 4, st["Uid"]
+    assert st["Gid"].split() == [str(nobody.pw_gid)] * 4, st["Gid"]
+    assert st["Groups"] in ("", str(nobody.pw_gid)), f"supplementary groups kept: {st['Groups']}"
+    master = open_master(rc.iface, 1)
+    try:
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    rc.stop()
+
+
+def _tcp_listeners(pid):
+    """(local address hex, port) of every listening TCP socket of the process's namespace."""
+    out = []
+    for table in ("tcp", "tcp6"):
+        lines = Path(f"/proc/{pid}/net/{table}").read_text().splitlines()[1:]
+        for line in lines:
+            fields = line.split()
+            addr, port = fields[1].split(":")
+            if fields[3] == "0A":  # TCP_LISTEN
+                out.append((table, addr, int(port, 16)))
+    return out
+
+
+def test_control_api_listens_on_loopback_only(rackcat):
+    rc = rackcat(pcap=False)
+    # Give both ends of the EtherCAT veth pair an IPv4 address (a /30 unique to this run).
+    n = os.getpid() % 250 + 1
+    host_ip, slave_ip = f"10.231.{n}.1", f"10.231.{n}.2"
+    subprocess.run(["ip", "addr", "add", f"{host_ip}/30", "dev", rc.iface], check=True)
+    subprocess.run(rc.ns.exec_prefix() + ["ip", "addr", "add", f"{slave_ip}/30", "dev",
+                                          rc.ns.slave_iface], check=True)
+    # Positive control: a listener on every address inside the namespace is reachable from
+    # the host over the veth pair, so a refusal below is the control API's doing.
+    probe_port = CONTROL_PORT + 1
+    probe = subprocess.Popen(rc.ns.exec_prefix() + [
+        "python3", "-c",
+        "import socket\n"
+        f"s = socket.create_server(('0.0.0.0', {probe_port}))\n"
+        "s.settimeout(20)\n"
+        "c, _ = s.accept(); c.sendall(b'reachable'); c.close()"])
+    try:
+        got = b""
+        deadline = time.monotonic() + 10
+        while not got:
+            try:
+                with socket.create_connection((slave_ip, probe_port), timeout=2) as c:
+                    got = c.recv(64)
+            except (ConnectionRefusedError, socket.timeout):
+                assert time.monotonic() < deadline, "the veth address is not reachable at all"
+                time.sleep(0.1)
+        assert got == b"reachable"
+    finally:
+        probe.kill()
+        probe.wait()
+
+    with pytest.raises(ConnectionRefusedError):
+        socket.create_connection((slave_ip, CONTROL_PORT), timeout=5).close()
+    # The listening socket is bound to 127.0.0.1 (0100007F), nothing on 0.0.0.0 or IPv6.
+    listeners = [x for x in _tcp_listeners(rc.proc.proc.pid) if x[2] == CONTROL_PORT]
+    assert listeners == [("tcp", "0100007F", CONTROL_PORT)], listeners
+    # ... and it answers there.
+    assert rc.ctl("GET", "/api/esm")["state"] == "INIT"
+    rc.stop()
+
+
+def _tree(root):
+    return {p.relative_to(root): p.is_symlink() for p in Path(root).rglob("*")}
+
+
+def store_parameters(slave, timeout_s=5.0):
+    """0xFBF2 Store Parameters ("save" to :01, poll :02 until it leaves 255 = executing)."""
+    slave.sdo_write(0xFBF2, 1, STORE_SAVE)
+    deadline = time.monotonic() + timeout_s
+    while True:
+        status = slave.sdo_read(0xFBF2, 2)[0]
+        if status != 255:
+            return status
+        assert time.monotonic() < deadline, "0xFBF2 still executing"
+        time.sleep(0.02)
+
+
+def test_nothing_written_outside_the_state_directory(rackcat, tmp_path):
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    victims = {name: outside / name for name in ("tmp-target", "bin-target")}
+    for path in victims.values():
+        path.write_bytes(b"must stay as it is")
+    # The state directory given with a ".." component, and prepared by someone hostile:
+    # the store's temp file and the parameter file are symlinks to files outside it.
+    (tmp_path / "sub").mkdir()
+    state = tmp_path / "state"
+    state.mkdir()
+    (state / "parameters.bin.tmp").symlink_to(victims["tmp-target"])
+    (state / "parameters.bin").symlink_to(victims["bin-target"])
+    rc = rackcat(pcap=False, state_dir=tmp_path / "sub" / ".." / "state")
+    before = _tree(tmp_path)
+
+    master = open_master(rc.iface, 1)
+    try:
+        s = master.slaves[0]
+        # Values from the wire that look like paths are refused or stored as plain bytes.
+        s.sdo_write(0x2000, 9, struct.pack("<I", 0x0000FF0F))
+        try:
+            s.sdo_write(0x2000, 4, b"../../../../tmp/x")
+        except pysoem.SdoError:
+            pass
+        # Either stored (0) in a plain file of its own or refused with an I/O error (2).
+        statuses = [store_parameters(s) for _ in range(2)]
+        assert set(statuses) <= {0, 2}, statuses
+        stored_ok = statuses[-1] == 0
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    rc.stop()
+
+    for name, path in victims.items():
+        assert path.read_bytes() == b"must stay as it is", f"{name} written through a symlink"
+    after = _tree(tmp_path)
+    new = sorted(str(p) for p in after if p not in before)
+    assert new == [], f"files created: {new}"
+    if stored_ok:
+        # The store replaced the symlinks by its own plain file (rename does not follow).
+        assert sorted(p.name for p in state.iterdir()) == ["parameters.bin"]
+        assert not (state / "parameters.bin").is_symlink()
