@@ -13,7 +13,8 @@
 # --mode    which checks ethercrab-interop runs (default: rackcat for rackcat, testslave for
 #           the test slave, guessed from the command name).
 # Environment: BUILD_DIR (default build), CARGO_JOBS (default 2), SLAVE_START_SECONDS (default 10,
-# how long to wait for the slave to come up), RUST_LOG (ethercrab's log level).
+# how long to wait for the slave to come up), MASTER_TIMEOUT_SECONDS (default 600, per run),
+# RUST_LOG (ethercrab's log level).
 #
 # Needs root (network namespaces, raw sockets): without it the script says so and exits 0.
 # Exit status: 0 when every run passed (or skipped), 1 otherwise.
@@ -23,6 +24,7 @@ ROOT=$(pwd)
 BUILD_DIR=${BUILD_DIR:-build}
 CARGO_JOBS=${CARGO_JOBS:-2}
 SLAVE_START_SECONDS=${SLAVE_START_SECONDS:-10}
+MASTER_TIMEOUT_SECONDS=${MASTER_TIMEOUT_SECONDS:-600}
 
 slave_cmd=""
 mode=""
@@ -87,6 +89,8 @@ fi
 
 echo "ethercrab_interop: building interop/ethercrab (cargo, crates.io)"
 cargo build --release --locked -j "$CARGO_JOBS" --manifest-path interop/ethercrab/Cargo.toml
+# the program's own unit tests (SII decoding, loopback checker, WKC model, raw CoE counters)
+cargo test --release --locked -j "$CARGO_JOBS" --manifest-path interop/ethercrab/Cargo.toml --quiet
 master="$ROOT/interop/ethercrab/target/release/ethercrab-interop"
 
 logdir=$(mktemp -d /tmp/ethercrab_interop.XXXXXX)
@@ -152,7 +156,8 @@ for n in $sizes; do
   sleep 0.3
 
   rc=0
-  ip netns exec "$ns" "${rt[@]}" "$master" --iface "$if_master" --expect-slaves "$n" --mode "$mode" \
+  # bounded whatever happens: ethercrab's own timeouts end every wait, this is the backstop
+  timeout --signal=KILL "$MASTER_TIMEOUT_SECONDS" ip netns exec "$ns" "${rt[@]}" "$master" --iface "$if_master" --expect-slaves "$n" --mode "$mode" \
     --cycles "$cycles" "${extra[@]}" 2>&1 | tee "$master_log" || rc=${PIPESTATUS[0]}
   if ! kill -0 "$slave_pid" 2>/dev/null; then
     echo "ethercrab_interop: the slave exited during the run; its output:" >&2
