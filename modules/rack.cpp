@@ -6,6 +6,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
 #include "mdp/sync_manager_layout.hpp"
@@ -96,6 +97,13 @@ Rack::Rack(mdp::Device& device, RackOptions options)
     for (const mdp::ChannelOptions& ch : sc.channels) {
       try {
         SourceParams params = ch.params;
+        // A replay file is relative to the rack file's directory.
+        if (auto f = params.find("file"); f != params.end() && !f->second.empty() &&
+                                          f->second.front() != '/' &&
+                                          std::filesystem::exists(cfg.source)) {
+          f->second =
+              (std::filesystem::path(cfg.source).parent_path() / f->second).lexically_normal();
+        }
         if (ch.loopback) {
           params["rim"] = std::to_string(ch.loopback->rim);
           params["slot"] = std::to_string(ch.loopback->slot);
@@ -286,6 +294,16 @@ void Rack::on_detect_modules(mdp::Device& device) {
     detected->image()[0] = n;
   }
   refresh();
+}
+
+void Rack::on_device_reset(mdp::Device&, bool) {
+  // 0xFBF0 emulates a power cycle: outputs undriven until new valid data, latched exceptions
+  // gone (the physical causes - unplugged RIMs, faults, fans - stay as they are).
+  for (size_t i = 0; i < drivers_.size(); ++i) drivers_[i]->de_energise();
+  outputs_valid_ = false;
+  publish_cpu_temperature();
+  tree_.reset_latched();
+  dirty_ = false;
 }
 
 void Rack::on_parameters_loaded(mdp::Device&) {

@@ -95,6 +95,7 @@ class Rack : public mdp::CycleListener {
   void on_exception_reset(mdp::Device&) override;
   void on_detect_modules(mdp::Device&) override;
   void on_parameters_loaded(mdp::Device&) override;
+  void on_device_reset(mdp::Device&, bool factory) override;
 
   // --- State and fault injection (device thread).
   mdp::Device& device() { return device_; }

@@ -18,11 +18,21 @@ void* operator new(std::size_t n) {
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void* operator new[](std::size_t n) {
+  return operator new(n);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
 
 using namespace rackcat;
 using namespace rackcat::modules;
@@ -37,9 +47,9 @@ TEST_F(RackTest, CyclicPathAllocatesNothing) {
   rack.set_source(ain, 2, "noise", {{"stddev", "0.5"}, {"seed", "3"}});
   rack.set_source(ain, 3, "ramp", {{"from", "-1"}, {"to", "1"}, {"period_s", "0.1"}});
   rack.set_source(ain, 4, "replay", {{"file", csv}, {"loop", "true"}});
-  rack.set_source(tc, 0, "plant",
-                  {{"plant", "oven"}, {"a", "-1 0; 1 -2"}, {"b", "1; 0"}, {"c", "0 1"},
-                   {"inputs", "1.11.0"}});
+  rack.set_source(
+      tc, 0, "plant",
+      {{"plant", "oven"}, {"a", "-1 0; 1 -2"}, {"b", "1; 0"}, {"c", "0 1"}, {"inputs", "1.11.0"}});
   rack.set_wiring_fault(at(1, 1).module().number, 2, WiringFault::ShortToGround);
   to_op();
   coe::Object& dout = module_obj(at(1, 1), 0x7000, 0x0);
