@@ -558,8 +558,39 @@ async fn check_coe<'a>(
                 }
             }
             if let Some(orig) = original {
+                // One byte more than the object holds (the upload gave its full length): the
+                // slave must refuse it with "length too high" (ETG.1000.6 Table 41, 0x06070012)
+                // at the initiate, before any segment.
+                let too_long = vec![b'9'; orig.len() + 1];
+                match mbx.download(sub, si, ss, &too_long, Some(3), Some(5)).await {
+                    Err(e) => r.check(
+                        e.contains("0x06070012"),
+                        format!(
+                            "{tag}: segmented download of {} bytes into the {}-byte {si:#06x}:{ss:02x} refused: {e} (expected abort 0x06070012)",
+                            too_long.len(),
+                            orig.len()
+                        ),
+                    ),
+                    Ok(_) => r.fail(format!(
+                        "{tag}: segmented download of {} bytes into the {}-byte {si:#06x}:{ss:02x} was accepted",
+                        too_long.len(),
+                        orig.len()
+                    )),
+                }
                 if let Err(e) = mbx.download(sub, si, ss, &orig, None, None).await {
                     r.fail(format!("{tag}: restoring {si:#06x}:{ss:02x}: {e}"));
+                }
+                match mbx.upload(sub, si, ss).await {
+                    Ok((data, _)) => r.check(
+                        data == orig,
+                        format!(
+                            "{tag}: {si:#06x}:{ss:02x} restored to {:?}",
+                            String::from_utf8_lossy(&data)
+                        ),
+                    ),
+                    Err(e) => r.fail(format!(
+                        "{tag}: upload after restoring {si:#06x}:{ss:02x}: {e}"
+                    )),
                 }
             }
             // A long string, to see which transfer type the slave picks for it.
