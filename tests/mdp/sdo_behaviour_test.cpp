@@ -205,3 +205,35 @@ TEST_F(SdoBehaviour, DetectModulesCommandNeedsItsByteSequence) {
 
 }  // namespace
 }  // namespace rackcat::mdp
+
+namespace rackcat::mdp {
+namespace {
+
+// Every entry of the whole dictionary answers an SDO upload in PREOP, SAFEOP and OP with its
+// value (nothing in Appendix A is write-only), and every ARRAY/RECORD a complete-access upload.
+TEST_F(SdoBehaviour, EveryEntryIsReadableInEveryMailboxState) {
+  for (EsmState s : {EsmState::PreOp, EsmState::SafeOp, EsmState::Op}) {
+    if (s != EsmState::PreOp) go(s);
+    size_t entries = 0;
+    device->dictionary().for_each([&](const coe::Object& o) {
+      for (const auto& e : o.entries()) {
+        if (e.padding) continue;
+        std::vector<uint8_t> d;
+        ASSERT_EQ(sdo->upload(o.index(), e.subindex, d), 0u)
+            << std::hex << o.index() << ":" << int(e.subindex);
+        if (e.bit_length % 8 == 0) {
+          EXPECT_EQ(d.size(), e.bit_length / 8u) << std::hex << o.index() << ":" << int(e.subindex);
+        }
+        ++entries;
+      }
+      if (o.code() != coe::ObjectCode::Var) {
+        std::vector<uint8_t> d;
+        EXPECT_EQ(sdo->upload(o.index(), 0, d, true), 0u) << std::hex << o.index();
+      }
+    });
+    EXPECT_GT(entries, 3000u);
+  }
+}
+
+}  // namespace
+}  // namespace rackcat::mdp
