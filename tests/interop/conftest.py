@@ -124,8 +124,9 @@ def probe_brd(iface, timeout_s=10.0):
                 r, _, _ = select.select([s], [], [], max(0.0, end - time.monotonic()))
                 if not r:
                     break
-                reply = s.recv(2048)
-                if len(reply) >= 30 and reply[6] & 0x02 and reply[17] == 0x5A:
+                reply, addr = s.recvfrom(2048)
+                outgoing = addr[2] == socket.PACKET_OUTGOING  # our own frame, not a reply
+                if not outgoing and len(reply) >= 30 and reply[6] & 0x02 and reply[17] == 0x5A:
                     return struct.unpack_from("<H", reply, 28)[0]
         return None
     finally:
