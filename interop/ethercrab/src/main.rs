@@ -1113,19 +1113,30 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
             .await
             .map_err(|e| format!("PRE-OP -> SAFE-OP: {e}"))?;
         check_states(md, &addrs, SubDeviceState::SafeOp, r).await;
-        let group = group
-            .request_into_op(md)
-            .await
-            .map_err(|e| format!("SAFE-OP -> OP request: {e}"))?;
-        let period = o.cycle_time;
-        let took = wait_all_op(
-            || async {
-                let resp = group.tx_rx(md).await?;
-                Ok((resp.all_op(), period))
-            },
-            "SAFE-OP -> OP",
-        )
-        .await?;
+        let (group, took) = if o.blocking_op {
+            // ethercrab's plain `into_op`, as its examples use it: request OP and poll the AL
+            // status, with no process data exchanged until OP is reached.
+            let t = Instant::now();
+            let group = group.into_op(md).await.map_err(|e| {
+                format!("SAFE-OP -> OP (into_op, no process data while waiting): {e}")
+            })?;
+            (group, t.elapsed())
+        } else {
+            let group = group
+                .request_into_op(md)
+                .await
+                .map_err(|e| format!("SAFE-OP -> OP request: {e}"))?;
+            let period = o.cycle_time;
+            let took = wait_all_op(
+                || async {
+                    let resp = group.tx_rx(md).await?;
+                    Ok((resp.all_op(), period))
+                },
+                "SAFE-OP -> OP",
+            )
+            .await?;
+            (group, took)
+        };
         r.pass(format!(
             "OP reached {} ms after the request",
             took.as_millis()

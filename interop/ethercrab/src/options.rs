@@ -24,6 +24,9 @@ pub struct Options {
     /// empty means the mode's default.
     pub wires: Vec<Wire>,
     pub sync0: bool,
+    /// Use ethercrab's blocking `into_op` (no process data until OP) instead of
+    /// `request_into_op` plus cycling.
+    pub blocking_op: bool,
     pub expect_vendor: Option<u32>,
     pub expect_product: Option<u32>,
     /// Writable string object exercised with normal and segmented SDO downloads.
@@ -49,6 +52,8 @@ usage: ethercrab-interop --iface IFACE [options]
   --wire OUT:IN[,OUT:IN]   loopback wiring as bit offsets in the SubDevice's output and
                            input images, e.g. 0:0,1:1 or byte.bit form 2.0:6.0
   --no-sync0               keep DC static drift compensation but do not start SYNC0
+  --blocking-op            with --no-sync0: go to OP with ethercrab's into_op (AL status
+                           polled, no process data until OP), as its examples do
   --expect-vendor N        expected vendor id, 0x.. for hex (checked against the SII identity,
                            which 0x1018 must match)
   --expect-product N       expected product code, likewise
@@ -122,6 +127,7 @@ impl Options {
             hold_cycles: 4,
             wires: Vec::new(),
             sync0: true,
+            blocking_op: false,
             expect_vendor: None,
             expect_product: None,
             string_object: (0x2000, 0x04),
@@ -152,6 +158,7 @@ impl Options {
                 }
                 "--wire" => o.wires = parse_wires(&value(&arg)?)?,
                 "--no-sync0" => o.sync0 = false,
+                "--blocking-op" => o.blocking_op = true,
                 "--expect-vendor" => o.expect_vendor = Some(parse_u32(&value(&arg)?)?),
                 "--expect-product" => o.expect_product = Some(parse_u32(&value(&arg)?)?),
                 "--string-object" => o.string_object = parse_object(&value(&arg)?)?,
@@ -169,6 +176,12 @@ impl Options {
         if o.string_value == o.string_value_segmented {
             return Err(
                 "the two string values must differ, or a failed write goes unseen".to_string(),
+            );
+        }
+        if o.blocking_op && o.sync0 {
+            return Err(
+                "--blocking-op needs --no-sync0 (with SYNC0 OP is requested, then cycled)"
+                    .to_string(),
             );
         }
         if o.cycle_time.is_zero() {
