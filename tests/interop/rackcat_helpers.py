@@ -146,10 +146,25 @@ class Rackcat:
     def pcap(self):
         return self.proc.pcap
 
-    # --- control API (HTTP + JSON on 127.0.0.1 inside the namespace) ---------------------
+    # --- control API (HTTP + JSON on 127.0.0.1 inside the slave's namespace) -------------
+
+    def cli(self, *args):
+        """`rackcat ctl ARGS`, the command-line client, inside the namespace; returns its JSON
+        answer. Fails with the command's message on a non-zero exit."""
+        cmd = self.ns.exec_prefix() + [str(RACKCAT), "ctl", "--port", str(CONTROL_PORT)]
+        cmd += [str(a) for a in args]
+        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           timeout=20)
+        assert r.returncode == 0, f"rackcat ctl {' '.join(map(str, args))}: exit " \
+            f"{r.returncode}: {r.stderr.strip()}"
+        return json.loads(r.stdout) if r.stdout.strip() else None
+
+    def module(self, number):
+        """One module with live channel values (`rackcat ctl list --module N --json`)."""
+        return self.cli("list", "--module", number, "--json")
 
     def ctl(self, method, path, body=None, expect=200):
-        """One control API request, made from inside the slave's namespace."""
+        """One raw control API request (curl inside the namespace); returns the JSON body."""
         cmd = self.ns.exec_prefix() + ["curl", "-s", "-S", "--max-time", "10", "-X", method,
                                        "-w", "\n%{http_code}"]
         if body is not None:
@@ -162,15 +177,21 @@ class Rackcat:
         assert int(code) == expect, f"control API {method} {path} -> {code}: {text}"
         return json.loads(text) if text else None
 
-    def ctl_while_cycling(self, master, method, path, body=None):
-        """A control API request made while the master keeps exchanging process data (in OP
-        the SM watchdog expires after 100 ms without frames; curl may take longer)."""
+    def _while_cycling(self, master, fn, *args):
+        # In OP the SM watchdog expires after 100 ms without frames; a control request may
+        # take longer, so the master keeps exchanging process data meanwhile.
         with concurrent.futures.ThreadPoolExecutor(1) as pool:
-            future = pool.submit(self.ctl, method, path, body)
+            future = pool.submit(fn, *args)
             while not future.done():
                 cycle(master)
                 time.sleep(CYCLE_S)
             return future.result()
+
+    def ctl_while_cycling(self, master, method, path, body=None):
+        return self._while_cycling(master, self.ctl, method, path, body)
+
+    def cli_while_cycling(self, master, *args):
+        return self._while_cycling(master, self.cli, *args)
 
     def _wait_control_api(self):
         deadline = time.monotonic() + 10
@@ -181,6 +202,7 @@ class Rackcat:
             except AssertionError:
                 if time.monotonic() > deadline:
                     raise
+                time.sleep(0.05)
 
 
 @pytest.fixture

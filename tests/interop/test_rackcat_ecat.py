@@ -136,7 +136,7 @@ def _cyclic(rc, slaves, cycles, reduced_map=False):
             if c % block == block - 1:
                 previous = pattern
         # The slave's application (slot card driver) holds what the master wrote last.
-        module = rc.ctl_while_cycling(master, "GET", f"/api/modules/{DO_MODULE}")
+        module = rc.cli_while_cycling(master, "list", "--module", DO_MODULE, "--json")
         commanded = sum(int(o["commanded"]) << o["channel"] for o in module["outputs"])
         assert commanded == pattern[0], (hex(commanded), hex(pattern[0]))
         assert bad_wkc == [], f"{len(bad_wkc)} cycles with WKC != {expected}: {bad_wkc[:10]}"

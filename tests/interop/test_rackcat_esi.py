@@ -9,8 +9,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from rackcat_helpers import (go, open_master, pysoem, rackcat, rackcat_tool, sii_image,
-                             to_op)
+from rackcat_helpers import (check_capture, go, open_master, pysoem, rackcat, rackcat_tool,
+                             sii_image, to_op)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -92,6 +92,7 @@ def test_sii_on_the_wire_equals_rackcat_sii_and_esi(rackcat, tmp_path, rack):
     finally:
         master.close()
     rc.stop()
+    check_capture(rc.pcap)
 
 
 # SOEM keeps object and entry names in EC_MAXNAME = 40 characters.
@@ -108,10 +109,10 @@ def test_sdo_information_on_the_wire_equals_rackcat_od(rackcat):
     expected = {int(o["index"], 16): o for o in reference}
     rc = rackcat(extra=["--no-pty"])
     master = open_master(rc.iface, 1)
+    problems = []
     try:
         od = master.slaves[0].od
         assert sorted(o.index for o in od) == sorted(expected), "object list (list type 1)"
-        problems = []
         for o in od:
             ref = expected[o.index]
             name = o.name.decode(errors="replace")
@@ -142,8 +143,10 @@ def test_sdo_information_on_the_wire_equals_rackcat_od(rackcat):
                     continue  # a gap inside the object: no description, as SOEM skips it
                 if got != want:
                     problems.append(f"0x{o.index:04X}:{k:02X}: {got} vs {want}")
-        assert problems == [], f"{len(problems)} differences:\n" + "\n".join(problems[:20])
         go(master, pysoem.INIT_STATE)
     finally:
         master.close()
     rc.stop()
+    # Wireshark decodes the fragmented SDO Information answers.
+    check_capture(rc.pcap)
+    assert problems == [], f"{len(problems)} differences:\n" + "\n".join(problems[:20])

@@ -160,7 +160,7 @@ def test_detect_modules_after_rim_loss_and_configured_list(rackcat):
         assert module_list(s, 0xF030) == DEFAULT_IDENTS
         s.sdo_write(0x2000, 0x0B, b"\x00")  # Detect Modules Override = 0
 
-        rc.ctl("POST", "/api/rim/unplug", {"rim": 2})
+        rc.cli("unplug", "--rim", 2)
         assert detect_modules(s) in (0, 1)
         assert module_list(s, 0xF050) == DEFAULT_IDENTS[:19]
         master.config_map()
@@ -171,7 +171,7 @@ def test_detect_modules_after_rim_loss_and_configured_list(rackcat):
         s.write_state()
         assert master.state_check(pysoem.PREOP_STATE, 2_000_000) == pysoem.PREOP_STATE
 
-        rc.ctl("POST", "/api/rim/replug", {"rim": 2})
+        rc.cli("replug", "--rim", 2)
         assert detect_modules(s) in (0, 1)
         assert module_list(s, 0xF050) == DEFAULT_IDENTS
         s = request_safeop(master)

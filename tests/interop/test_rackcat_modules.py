@@ -8,8 +8,8 @@ import struct
 import time
 
 from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, EXCEPTION_RESET, UART_MODULE,
-                             cycle, get_bits, go, open_master, pysoem, rackcat, read_pdo_map,
-                             run_cycles, set_bits, to_op)
+                             check_capture, cycle, get_bits, go, open_master, pysoem, rackcat,
+                             read_pdo_map, run_cycles, set_bits, to_op)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -106,7 +106,7 @@ def test_rim_unplug_exception_tree_emergency_and_reset(rackcat):
         assert u32(s, 0xF388, 1) == 0 and s.sdo_read(0xF380, 0) == b"\x00"
         assert s.sdo_read(0xF390, 0) == b"\x00"
 
-        rc.ctl("POST", "/api/rim/unplug", {"rim": 2})
+        rc.cli("unplug", "--rim", 2)
         # RIM 2 offline: state 0, the latched "state error" bit 3 (ONLINE -> OFFLINE).
         assert u32(s, rim2, 8) == 0x00000008
         # Global manufacturer error details: bit rr for RIM rr (guide Table 20).
@@ -121,7 +121,7 @@ def test_rim_unplug_exception_tree_emergency_and_reset(rackcat):
         assert reg & 0x01, f"error register 0x{reg:02X} without the generic error bit"
         assert b1 == 2, f"emergency names RIM {b1}, expected 2"
 
-        rc.ctl("POST", "/api/rim/replug", {"rim": 2})
+        rc.cli("replug", "--rim", 2)
         # Online again; the latched bits stay until the exception reset.
         assert u32(s, rim2, 8) == 0x0000000A
         assert u32(s, 0xF388, 1) == 0
@@ -133,17 +133,19 @@ def test_rim_unplug_exception_tree_emergency_and_reset(rackcat):
         assert u32(s, rim2, 8) == 0x00000002
         assert s.sdo_read(0xF390, 0) == b"\x00"
         # The control API sees the same tree.
-        tree = rc.ctl("GET", "/api/exceptions")
+        tree = rc.cli("exceptions")
         assert tree["F380"] == "0x00000000" and tree["F390"] == "0x00000000", tree
         go(master, pysoem.INIT_STATE)
     finally:
         master.close()
     rc.stop()
+    # Wireshark decodes the emergency mailbox messages like every other frame.
+    check_capture(rc.pcap)
 
 
 def test_uart_bytes_from_the_pty_arrive_in_rx_object_and_status(rackcat):
     rc = rackcat()
-    info = rc.ctl("GET", f"/api/modules/{UART_MODULE}")
+    info = rc.module(UART_MODULE)
     pty = info["uart"][0]["pty"]
     assert pty.startswith("/dev/pts/"), info["uart"][0]
     assert pty in rc.log(), "the pseudo-terminal path is printed at start"
@@ -198,7 +200,7 @@ def ack_error_and_init(master, state):
 
 def driven_word(rc, master, module):
     """The levels a digital output card drives now, from the control API (bit n = channel n)."""
-    m = rc.ctl_while_cycling(master, "GET", f"/api/modules/{module}")
+    m = rc.cli_while_cycling(master, "list", "--module", module, "--json")
     return sum(int(o["driven"]) << o["channel"] for o in m["outputs"])
 
 
@@ -223,7 +225,7 @@ def test_rim_lost_in_op_with_detect_modules_override_0_goes_to_safeop(rackcat):
         assert wait_loopback(master, do, di, 0x0FF0) == 0x0FF0
         assert driven_word(rc, master, 26) == 0x00FF
 
-        rc.ctl_while_cycling(master, "POST", "/api/rim/unplug", {"rim": 2})
+        rc.cli_while_cycling(master, "unplug", "--rim", 2)
         run_cycles(master, 50)
         master.read_state()
         assert s.state == pysoem.SAFEOP_STATE | pysoem.STATE_ERROR, hex(s.state)
@@ -273,7 +275,7 @@ def test_uart_bytes_written_by_the_master_leave_on_the_pty(rackcat):
     """0x5nn7 UART Tx data channel 0: a complete-access write (subindex 0 = count, then the
     bytes) transmits them; a serial program on the pseudo-terminal reads them."""
     rc = rackcat()
-    pty = rc.ctl("GET", f"/api/modules/{UART_MODULE}")["uart"][0]["pty"]
+    pty = rc.module(UART_MODULE)["uart"][0]["pty"]
     fd = os.open(pty, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
     master = open_master(rc.iface, 1)
     try:
