@@ -14,6 +14,7 @@
 //! read from `SubDevice`'s Debug output (the field is not public).
 
 use ethercrab::{Command, MainDevice, SubDevice};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// Mailbox header (6) + CoE header (2) + SDO command/index/subindex (4) + size/data (4).
@@ -23,6 +24,10 @@ const COE_SDO_REQUEST: u16 = 2;
 const COE_SDO_RESPONSE: u16 = 3;
 const COE_SDO_INFO: u16 = 8;
 const RESPONSE_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// (station, last counter sent from here, ethercrab's next counter at that moment), shared by
+/// every `RawMailbox` so a new one does not repeat the counter an earlier one left behind.
+static LAST_SENT: Mutex<Vec<(u16, u8, u8)>> = Mutex::new(Vec::new());
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum UploadKind {
@@ -132,6 +137,22 @@ impl<'a> RawMailbox<'a> {
         })
     }
 
+    /// The counter this program last sent to `station`, if ethercrab sent nothing since (then
+    /// the slave still holds it as its "previous" counter).
+    fn remembered_counter(station: u16, ethercrab_next: u8) -> u8 {
+        let sent = LAST_SENT.lock().unwrap_or_else(|e| e.into_inner());
+        sent.iter()
+            .find(|(st, _, next)| *st == station && *next == ethercrab_next)
+            .map(|(_, c, _)| *c)
+            .unwrap_or(0)
+    }
+
+    fn remember_counter(station: u16, counter: u8, ethercrab_next: u8) {
+        let mut sent = LAST_SENT.lock().unwrap_or_else(|e| e.into_inner());
+        sent.retain(|(st, _, _)| *st != station);
+        sent.push((station, counter, ethercrab_next));
+    }
+
     async fn sm_status(&self, sm: u8) -> Result<u8, String> {
         let reg = 0x0805 + 8 * u16::from(sm);
         Command::fprd(self.station, reg)
@@ -154,6 +175,9 @@ impl<'a> RawMailbox<'a> {
         let ethercrab_next = ethercrab_next_counter(sd).ok_or_else(|| {
             "cannot read ethercrab's mailbox counter from SubDevice's Debug output".to_string()
         })?;
+        if self.last_sent == 0 {
+            self.last_sent = Self::remembered_counter(self.station, ethercrab_next);
+        }
         let counter = pick_counter(self.last_sent, ethercrab_next);
 
         // A stale response left in the send mailbox would be taken for ours.
@@ -201,6 +225,7 @@ impl<'a> RawMailbox<'a> {
                 )
             })?;
         self.last_sent = counter;
+        Self::remember_counter(self.station, counter, ethercrab_next);
 
         let deadline = Instant::now() + RESPONSE_TIMEOUT;
         while self.sm_status(self.tx.sm).await? & 0x08 == 0 {
