@@ -99,6 +99,9 @@ slave_pid=""
 cleanup() {
   if [ -n "$slave_pid" ]; then
     kill "$slave_pid" 2>/dev/null || true
+    # SIGTERM ends the slave cleanly; SIGKILL after 5 s so cleanup never hangs
+    for _ in $(seq 1 50); do kill -0 "$slave_pid" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$slave_pid" 2>/dev/null || true
     wait "$slave_pid" 2>/dev/null || true
     slave_pid=""
   fi
