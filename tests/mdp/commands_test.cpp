@@ -5,6 +5,7 @@
 #include <openssl/evp.h>
 #include <zlib.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -46,10 +47,12 @@ class Commands : public ::testing::Test {
   void go(EsmState to) { device->state_changed(device->state(), to); }
   // 0xFBF2 answers at once with status 255 (executing); the store finishes on a worker thread.
   uint64_t wait_store() {
-    uint64_t status = 255;
-    for (int i = 0; i < 4000 && status == 255; ++i) {
+    // Bounded only so a broken worker fails the test instead of hanging it.
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    uint64_t status = sdo->read_u(0xFBF2, 2);
+    while (status == 255 && std::chrono::steady_clock::now() < give_up) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
       status = sdo->read_u(0xFBF2, 2);
-      if (status == 255) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     return status;
   }

@@ -9,6 +9,7 @@ Exit code 0 on success; every check prints one line.
 """
 import struct
 import sys
+import time
 
 import pysoem
 
@@ -67,10 +68,10 @@ def main():
             check("0x2000:04 written in PREOP", text(s.sdo_read(0x2000, 4)) == address)
             s.sdo_write(0xFBF2, 1, b"save")
             status = 255
-            for _ in range(1000):  # 255 = executing (ETG.5003.1); the store runs off the ESC thread
+            deadline = time.monotonic() + 30  # 255 = executing (ETG.5003.1): fsync off the ESC thread
+            while status == 255 and time.monotonic() < deadline:
                 status = struct.unpack("<B", s.sdo_read(0xFBF2, 2))[0]
-                if status != 255:
-                    break
+                time.sleep(0.01)
             check("0xFBF2 store completed (status 0)", status == 0, str(status))
         else:
             check("0x2000:04 survived the restart", text(s.sdo_read(0x2000, 4)) == address,
