@@ -64,6 +64,16 @@ double finite_or_zero(double v) {
   return std::isfinite(v) ? v : 0.0;
 }
 
+// Text that echoes request bytes (paths, file contents in parse errors) may not be UTF-8; a
+// JSON answer must be. Anything outside printable ASCII becomes '?'.
+std::string printable(std::string_view s) {
+  std::string out(s.substr(0, 512));
+  for (char& c : out) {
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
+  }
+  return out;
+}
+
 // Typed field access with precise errors.
 const json& field(const json& body, const char* key) {
   if (!body.is_object()) throw BadRequest("the request body must be a JSON object");
@@ -264,9 +274,9 @@ ControlApi::Response ControlApi::handle(std::string_view method, std::string_vie
   try {
     return dispatch(method, path, parsed);
   } catch (const std::invalid_argument& e) {
-    return {400, {{"error", e.what()}}};
+    return {400, {{"error", printable(e.what())}}};
   } catch (const std::exception& e) {
-    return {500, {{"error", e.what()}}};
+    return {500, {{"error", printable(e.what())}}};
   }
 }
 
@@ -275,7 +285,8 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
   const bool get = method == "GET";
   const bool post = method == "POST";
   auto wrong_method = [&] {
-    return Response{405, {{"error", fmt::format("{} does not accept {}", path, method)}}};
+    return Response{
+        405, {{"error", fmt::format("{} does not accept {}", printable(path), printable(method))}}};
   };
 
   if (path == "/api/rack") {
@@ -293,7 +304,7 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
     }
     CardDriver* d = rack_.driver(static_cast<uint16_t>(n));
     if (num.empty() || d == nullptr)
-      return {404, {{"error", fmt::format("there is no module {}", num)}}};
+      return {404, {{"error", fmt::format("there is no module {}", printable(num))}}};
     rack_.refresh();
     return {200, module_json(rack_, *d)};
   }
@@ -442,7 +453,7 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
     j["accepted"] = accepted;
     return {200, j};
   }
-  return {404, {{"error", fmt::format("no endpoint {} {}", method, path)}}};
+  return {404, {{"error", fmt::format("no endpoint {} {}", printable(method), printable(path))}}};
 }
 
 uint16_t ControlApi::listen(uint16_t port) {

@@ -4,6 +4,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <stdexcept>
@@ -125,6 +126,12 @@ bool parse_double(std::string_view s, double& out) {
 }  // namespace
 
 std::unique_ptr<ReplaySource> ReplaySource::from_csv(const std::string& path, bool loop) {
+  // A recording is a regular file of bounded size (not a device such as /dev/zero).
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw std::runtime_error(fmt::format("{}: not a readable regular file", path));
+  if (std::filesystem::file_size(path, ec) > kMaxReplayBytes)
+    throw std::runtime_error(fmt::format("{}: larger than {} bytes", path, kMaxReplayBytes));
   std::ifstream in(path);
   if (!in) throw std::runtime_error(fmt::format("{}: cannot open file", path));
   std::vector<Sample> samples;

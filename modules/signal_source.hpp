@@ -103,6 +103,7 @@ class ReplaySource final : public Source {
     double value;
   };
   ReplaySource(std::vector<Sample> samples, bool loop, std::string origin = {});
+  static constexpr uintmax_t kMaxReplayBytes = 64u << 20;
   // Throws std::runtime_error("<path>:<line>: <problem>") on a bad file.
   static std::unique_ptr<ReplaySource> from_csv(const std::string& path, bool loop);
 

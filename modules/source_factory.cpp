@@ -143,6 +143,10 @@ std::unique_ptr<StateSpacePlant> make_plant(const SourceParams& params, double d
   Eigen::MatrixXd c = to_eigen(parse_matrix(get("c"), "plant c"));
   Eigen::MatrixXd d;
   if (params.count("d")) d = to_eigen(parse_matrix(params.at("d"), "plant d"));
+  // Small plants only: the matrix exponential is computed once, but every cycle pays n^2.
+  constexpr Eigen::Index kMaxDim = 32;
+  if (a.rows() > kMaxDim || b.cols() > kMaxDim || c.rows() > kMaxDim)
+    throw std::invalid_argument("plant: at most 32 states, inputs and outputs");
   auto plant = std::make_unique<StateSpacePlant>(a, b, c, d, dt);
   if (params.count("x0")) {
     const MatrixText x0 = parse_matrix(params.at("x0"), "plant x0");
@@ -196,7 +200,13 @@ std::unique_ptr<Source> make_source(std::string_view kind, const SourceParams& p
     s = std::make_unique<NoiseSource>(p.number("mean", 0.0), p.number("stddev"),
                                       static_cast<uint64_t>(seed));
   } else if (kind == "replay") {
-    s = ReplaySource::from_csv(p.text("file"), p.flag("loop", true));
+    const std::string file = p.text("file");
+    const bool loop = p.flag("loop", true);
+    try {
+      s = ReplaySource::from_csv(file, loop);
+    } catch (const std::runtime_error& e) {
+      throw std::invalid_argument(std::string("replay: ") + e.what());  // a bad request
+    }
   } else if (kind == "loopback") {
     uint8_t rim = 0, slot = 0;
     if (p.has("module")) {

@@ -109,6 +109,18 @@ TEST_F(ControlApiTest, InvalidRequestsGetAReasonAndChangeNothing) {
     EXPECT_NE(r.body["error"].get<std::string>().find(c.reason), std::string::npos)
         << r.body["error"] << " for " << c.body.dump();
   }
+  // Replay files must be regular, bounded files; a bad one is a bad request.
+  for (const char* file : {"/nonexistent/wave.csv", "/dev/zero"}) {
+    auto r =
+        call("POST", "/api/channel",
+             {{"module", n}, {"channel", 0}, {"source", "replay"}, {"params", {{"file", file}}}});
+    EXPECT_EQ(r.status, 400) << file;
+    EXPECT_NE(r.body["error"].get<std::string>().find("regular file"), std::string::npos);
+  }
+  // Request bytes echoed in an answer are made printable so the answer stays valid JSON.
+  auto odd = api.handle("GET", "/api/\xff\xfe", "");
+  EXPECT_EQ(odd.status, 404);
+  EXPECT_NO_THROW((void)odd.body.dump());
   auto bad_json = api.handle("POST", "/api/channel", "{not json");
   EXPECT_EQ(bad_json.status, 400);
   EXPECT_EQ(at(1, 12).inputs()[0].source->describe(), before);
