@@ -150,14 +150,17 @@ class Rackcat:
 
     def cli(self, *args):
         """`rackcat ctl ARGS`, the command-line client, inside the namespace; returns its JSON
-        answer. Fails with the command's message on a non-zero exit."""
+        answer (or its text). Fails with the command's message on a non-zero exit."""
         cmd = self.ns.exec_prefix() + [str(RACKCAT), "ctl", "--port", str(CONTROL_PORT)]
         cmd += [str(a) for a in args]
         r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                            timeout=20)
         assert r.returncode == 0, f"rackcat ctl {' '.join(map(str, args))}: exit " \
             f"{r.returncode}: {r.stderr.strip()}"
-        return json.loads(r.stdout) if r.stdout.strip() else None
+        try:
+            return json.loads(r.stdout)
+        except json.JSONDecodeError:
+            return r.stdout  # commands that print a table (list, set without --json)
 
     def module(self, number):
         """One module with live channel values (`rackcat ctl list --module N --json`)."""
