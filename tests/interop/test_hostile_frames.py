@@ -203,6 +203,9 @@ def test_malformed_frames_and_register_abuse_then_op(rackcat):
             assert raw.error_counters() == (expected_errors, expected_errors)
             return reply
 
+        # Cut inside the EtherCAT header: no EtherCAT frame at all, not answered, not counted.
+        assert raw.exchange(raw.frame(b"")[:15], timeout_s=0.3) is None
+        assert raw.error_counters() == (0, 0)
         # Truncated frame: the datagram header ends after 6 bytes; nothing is processed and the
         # bytes come back as they were.
         full = dgram(APRD, raw.next_idx(), phys(0, REG_TYPE), b"\0\0")

@@ -10,9 +10,11 @@ restarting rackcat.
 
 Timing is observed from the master side with a raw socket: after the last process-data frame
 the AL status register is polled with FPRD (reads do not retrigger the watchdog, only SM2
-writes do), and the inputs with LRD. The state change is certified late only if it was seen
-after watchdog + one cycle counted from the *send* of the last frame, so observation delay
-counts against the device, never for it.
+writes do), and the inputs with LRD. The device processed the last frame before its reply
+came back (t_last_recv), so its watchdog expires by t_last_recv + watchdog; a poll *sent* later
+than that plus one cycle that still finds OP proves the device late. A SAFEOP reply that comes
+back sooner than the watchdog time after the last frame was *sent* proves it early. Both are
+failures in any trial; the scheduling delay of the observer can make neither happen falsely.
 
 Needs root (network namespace, veth, raw sockets); skips with a message otherwise.
 """
@@ -28,7 +30,7 @@ from test_hostile_frames import FPRD, LRD, REG_AL_STATUS, REG_FMMU, REG_STATION,
 
 assert rackcat  # the fixture, imported for pytest
 
-TRIALS = int(os.environ.get("RACKCAT_MASTER_LOSS_TRIALS", "20"))
+TRIALS = int(os.environ.get("RACKCAT_MASTER_LOSS_TRIALS", "50"))
 REG_WD_PD = 0x0420  # process-data watchdog time in units of the divider (100 us by default)
 WATCHDOG_S = 0.050
 AL_SAFEOP_ERROR = 0x14
@@ -111,7 +113,8 @@ def test_master_loss_in_op_safeop_0x001b_safe_outputs_every_trial(rackcat):
             s.output = set_bits(s.output, do, 0xFFFF)
             t_last = time.monotonic()
             master.send_processdata()
-            master.receive_processdata(20_000)
+            assert master.receive_processdata(20_000) > 0, f"trial {trial}: last frame lost"
+            t_last_recv = time.monotonic()
             seen = None
             while seen is None:
                 t_poll = time.monotonic()
@@ -121,11 +124,14 @@ def test_master_loss_in_op_safeop_0x001b_safe_outputs_every_trial(rackcat):
                 state, code = al[0], struct.unpack_from("<H", al, 4)[0]
                 if state == AL_SAFEOP_ERROR:
                     seen = (t_seen - t_last, code)
-                    # Went down no earlier than the watchdog time after the last SM2 write.
+                    # Went down no earlier than the watchdog time after the last SM2 write
+                    # (1 % for the watchdog's 100 us resolution).
                     assert t_seen - t_last >= wd * 0.99, f"trial {trial}: early {t_seen - t_last}"
                 else:
                     assert state == pysoem.OP_STATE, f"trial {trial}: AL status 0x{state:02X}"
-                    assert t_poll - t_last < wd + 0.5, f"trial {trial}: watchdog never expired"
+                    late_by = t_poll - t_last_recv - wd
+                    assert late_by <= CYCLE_S, \
+                        f"trial {trial}: still OP {late_by * 1e3:.2f} ms after the watchdog time"
             latency, code = seen
             assert code == AL_CODE_WATCHDOG, f"trial {trial}: AL status code 0x{code:04X}"
             # Every output de-energised: the DI card wired to the DO card reads 0.
@@ -138,10 +144,11 @@ def test_master_loss_in_op_safeop_0x001b_safe_outputs_every_trial(rackcat):
                     m = rc.ctl("GET", f"/api/modules/{n}")
                     assert all(o["driven"] == 0 for o in m["outputs"]), (n, m["outputs"])
             back_to_op(master)
-        late = [x for x in latencies if x > wd + CYCLE_S]
-        print(f"master loss: {TRIALS} trials, watchdog {wd * 1e3:.1f} ms, seen after "
-              f"{min(latencies) * 1e3:.2f}..{max(latencies) * 1e3:.2f} ms")
-        assert not late, f"SAFEOP later than watchdog + 1 cycle in {len(late)} trials: {late}"
+        latencies.sort()
+        print(f"master loss: {TRIALS} trials, watchdog {wd * 1e3:.1f} ms, SAFEOP + 0x001B + safe "
+              f"outputs seen {latencies[0] * 1e3:.2f} ms (min), "
+              f"{latencies[len(latencies) // 2] * 1e3:.2f} ms (median), "
+              f"{latencies[-1] * 1e3:.2f} ms (max, observer delay included) after the last frame")
         go(master, pysoem.INIT_STATE)
     finally:
         raw.close()
