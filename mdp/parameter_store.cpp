@@ -91,7 +91,13 @@ bool ParameterStore::save(uint32_t fingerprint, std::span<const uint8_t> payload
   if (!make_dirs(dir, error)) return false;
   const std::vector<uint8_t> bytes = encode(fingerprint, payload);
   const std::string tmp = path_ + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  // A leftover temp file (or a symlink planted in its place) is removed, never followed: the
+  // new one is created afresh (O_EXCL, O_NOFOLLOW), so a store writes only inside `dir`.
+  if (::unlink(tmp.c_str()) != 0 && errno != ENOENT) {
+    error = errno_text("cannot remove", tmp);
+    return false;
+  }
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
   if (fd < 0) {
     error = errno_text("cannot create", tmp);
     return false;
