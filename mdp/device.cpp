@@ -224,7 +224,7 @@ void Device::Impl::install_hooks() {
   }
   // 0x1C12/0x1C13: a new assignment recompiles the process image (mailbox path, PREOP only).
   for (uint16_t index : {uint16_t{0x1C12}, uint16_t{0x1C13}}) {
-    od.find(index)->hooks.after_write = [this, index](Object&, int) { image->compile(); };
+    od.find(index)->hooks.after_write = [this](Object&, int) { image->compile(); };
   }
   // 0x1C32/0x1C33: counters from the cyclic path; Get Cycle Time = 2 resets them.
   for (int dir = 0; dir < 2; ++dir) {
