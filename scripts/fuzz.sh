@@ -4,8 +4,10 @@
 #
 #   scripts/fuzz.sh [--build-dir DIR] [--seconds N | --minutes N]
 #
-# The seed corpus of target fuzz_X is fuzz/corpus/X/ (kept small in the repo); new inputs are
-# written to a scratch copy under fuzz/corpus-work/ (git-ignored), never into the repo.
+# The seed corpus of target fuzz_X is fuzz/corpus/X/ (kept small in the repo; cut from real
+# traffic by fuzz/seed_corpora.py), plus fuzz/<area>/corpus/ when an area keeps its own (area =
+# X up to the first underscore); new inputs are written to a scratch copy under
+# fuzz/corpus-work/ (git-ignored), never into the repo. JOBS limits the build (default nproc).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=build-fuzz
@@ -22,7 +24,7 @@ if [ ! -d "$BUILD" ]; then
   CC=clang CXX=clang++ cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DRACKCAT_SANITIZE=ON -DRACKCAT_FUZZ=ON -DRACKCAT_BENCH=OFF >/dev/null
 fi
-cmake --build "$BUILD" -j "$(nproc)" >/dev/null
+cmake --build "$BUILD" -j "${JOBS:-$(nproc)}" >/dev/null
 mapfile -t targets < <(find "$BUILD" -maxdepth 3 -type f -name 'fuzz_*' -perm -u+x | sort)
 if [ ${#targets[@]} -eq 0 ]; then echo "fuzz: no targets built"; exit 1; fi
 for t in "${targets[@]}"; do
@@ -30,6 +32,8 @@ for t in "${targets[@]}"; do
   work=fuzz/corpus-work/$name
   mkdir -p "$work"
   [ -d "fuzz/corpus/$name" ] && cp -n fuzz/corpus/"$name"/* "$work"/ 2>/dev/null || true
+  area=${name%%_*}
+  [ -d "fuzz/$area/corpus" ] && cp -n fuzz/"$area"/corpus/* "$work"/ 2>/dev/null || true
   echo "fuzz: $name for ${SECONDS_PER_TARGET}s"
   log=fuzz/corpus-work/$name.log
   if ! ASAN_OPTIONS=detect_leaks=1 "$t" -max_total_time="$SECONDS_PER_TARGET" -print_final_stats=1 \

@@ -5,6 +5,8 @@
 #
 #   scripts/soak.sh [--minutes N] [--slaves N]      (root; skips with a message otherwise)
 #
+# RACKCAT_BUILD_DIR selects the build directory holding rackcat (default build/).
+#
 # Fails when a cycle without injected faults has a wrong working counter, or when resident
 # memory grows. Long runs are recorded in docs/RELIABILITY.md.
 set -euo pipefail
@@ -22,8 +24,9 @@ if [ "$(id -u)" -ne 0 ]; then
   echo "soak: skipped: needs root to create a network namespace and a veth pair"
   exit 0
 fi
-[ -x build/rackcat ] || { cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null;
-                          cmake --build build --target rackcat -j "$(nproc)" >/dev/null; }
+BUILD=${RACKCAT_BUILD_DIR:-build}
+[ -x "$BUILD/rackcat" ] || { cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null;
+                             cmake --build "$BUILD" --target rackcat -j "$(nproc)" >/dev/null; }
 . scripts/netns.sh
 NS=rackcat-soak-$$
 STATE=$(mktemp -d)
@@ -34,7 +37,7 @@ netns_up "$NS" ecat-slave ecat-master
 # machine plain scheduling delays exceed SOEM's 2 ms receive timeout now and then.
 RT=()
 if command -v chrt >/dev/null && chrt -f 40 true 2>/dev/null; then RT=(chrt -f 40); fi
-ip netns exec "$NS" "${RT[@]}" build/rackcat run --iface ecat-slave --slaves "$SLAVES" --state-dir "$STATE" \
+ip netns exec "$NS" "${RT[@]}" "$BUILD/rackcat" run --iface ecat-slave --slaves "$SLAVES" --state-dir "$STATE" \
   --no-pty >"$STATE/rackcat.log" 2>&1 &
 SLAVE=$!
 sleep 0.5
