@@ -13,10 +13,10 @@ namespace rackcat::modules::canopen {
 struct BusStatus {
   uint64_t rx_frames = 0;
   uint64_t tx_frames = 0;
-  uint64_t tx_dropped = 0;    // the send queue was full (no ACK, controller stopped)
-  uint64_t error_frames = 0;  // every error frame read
-  bool bus_off = false;       // the controller left the bus (TEC > 255)
-  bool error_passive = false; // TEC or REC above 127
+  uint64_t tx_dropped = 0;     // the send queue was full (no ACK, controller stopped)
+  uint64_t error_frames = 0;   // every error frame read
+  bool bus_off = false;        // the controller left the bus (TEC > 255)
+  bool error_passive = false;  // TEC or REC above 127
 };
 
 class CanBus {

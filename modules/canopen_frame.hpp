@@ -32,16 +32,20 @@ struct CanFrame {
 // Function codes (bits 10..7 of the COB-ID), CiA 301 Table 72.
 namespace cob {
 inline constexpr uint32_t kNmt = 0x000;
-inline constexpr uint32_t kEmcy = 0x080;  // + node-ID (node-ID 0 is SYNC)
-inline constexpr uint32_t kSdoTx = 0x580;  // server -> client, + node-ID
-inline constexpr uint32_t kSdoRx = 0x600;  // client -> server, + node-ID
+inline constexpr uint32_t kEmcy = 0x080;       // + node-ID (node-ID 0 is SYNC)
+inline constexpr uint32_t kSdoTx = 0x580;      // server -> client, + node-ID
+inline constexpr uint32_t kSdoRx = 0x600;      // client -> server, + node-ID
 inline constexpr uint32_t kHeartbeat = 0x700;  // NMT error control, + node-ID
 // TPDO1..4 and RPDO1..4 of the pre-defined connection set.
 inline constexpr std::array<uint32_t, 4> kTpdo{0x180, 0x280, 0x380, 0x480};
 inline constexpr std::array<uint32_t, 4> kRpdo{0x200, 0x300, 0x400, 0x500};
 
-constexpr uint32_t function(uint32_t id) { return id & 0x780; }
-constexpr uint8_t node(uint32_t id) { return static_cast<uint8_t>(id & 0x7F); }
+constexpr uint32_t function(uint32_t id) {
+  return id & 0x780;
+}
+constexpr uint8_t node(uint32_t id) {
+  return static_cast<uint8_t>(id & 0x7F);
+}
 }  // namespace cob
 
 }  // namespace rackcat::modules::canopen

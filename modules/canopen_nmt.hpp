@@ -75,8 +75,8 @@ class HeartbeatConsumer {
  public:
   struct Node {
     Micros timeout = 0;
-    bool alive = false;      // a heartbeat or boot-up came within the timeout
-    bool booted = false;     // the last message was a boot-up (the node reset)
+    bool alive = false;   // a heartbeat or boot-up came within the timeout
+    bool booted = false;  // the last message was a boot-up (the node reset)
     NmtState state = NmtState::BootUp;
     Micros last_seen = 0;
   };
