@@ -26,6 +26,7 @@ using rackcat::coe::EsmState;
 
 struct Harness {
   double clock = 0.0;
+  uint64_t cycles = 0;
   rackcat::mdp::Device device;
   rackcat::modules::Rack rack;
   rackcat::modules::ControlApi api;
@@ -57,7 +58,9 @@ struct Harness {
 
   void cycle() {
     clock += 0.001;
-    for (size_t i = 0; i < outputs.size(); ++i) outputs[i] = static_cast<uint8_t>(clock * 1000 + i);
+    ++cycles;
+    for (size_t i = 0; i < outputs.size(); ++i)
+      outputs[i] = static_cast<uint8_t>((cycles + i) & 0xFF);
     device.write_outputs(outputs);
     device.read_inputs(inputs);
   }
