@@ -157,6 +157,8 @@ class DictionaryWriter {
   }
 
   void write_object(const coe::Object& obj) {
+    // An object without entries has no type to announce (the dictionary never builds one).
+    if (obj.entries().empty()) return;
     auto o = objects_.append_child("Object");
     auto idx = o.append_child("Index");
     idx.text().set(esi_hex(obj.index(), 4).c_str());
@@ -165,8 +167,7 @@ class DictionaryWriter {
 
     if (obj.code() == coe::ObjectCode::Var) {
       const auto* e = obj.entry(0);
-      if (!e && !obj.entries().empty()) e = &obj.entries().front();
-      if (!e) return;
+      if (!e) e = &obj.entries().front();
       text_child(o, "Type", declare_entry_type(*e));
       o.append_child("BitSize").text().set(e->bit_length);
       auto info = o.append_child("Info");
