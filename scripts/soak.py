@@ -7,7 +7,9 @@ through rackcat's control API (127.0.0.1:8765 in the same namespace) every few s
 Detect Modules Override at its default (1) the slave stays in OP, so the working counter must
 stay right here too; errors are reported per phase. A frame whose reply did not come back
 within SOEM's 2 ms is a lost frame, reported apart from WKC errors (a reply with a wrong
-working counter): on a loaded 2-core VM the veth's soft interrupts are sometimes late.
+working counter): on a loaded 2-core VM the veth's soft interrupts are sometimes late. In the
+same way an SDO read that got no reply in time (pysoem.WkcError) is a timeout, reported; an
+SDO read answered wrongly (abort, mailbox error, unexpected packet) is a failure.
 """
 import argparse
 import json
@@ -77,6 +79,8 @@ def main():
     cycles = {1: 0, 2: 0}
     sdo = {"ok": 0, "failed": 0, "emergencies": 0}
     late = [0]
+    sdo_timeouts = {1: 0, 2: 0}
+    sdo_errors = []
 
     def cyclic():
         period = 0.001
@@ -114,8 +118,14 @@ def main():
                 # SOEM hands an Emergency that arrives instead of the SDO reply to the caller;
                 # phase 2's faults raise them (0xA001 module missing ...).
                 sdo["emergencies"] += 1
-            except (pysoem.SdoError, pysoem.MailboxError, pysoem.PacketError, pysoem.WkcError):
+            except pysoem.WkcError:
+                # No reply within SOEM's mailbox timeout: a lost mailbox frame, the same
+                # scheduling effect as a lost process-data frame, reported with them.
+                sdo_timeouts[phase[0]] += 1
+            except (pysoem.SdoError, pysoem.MailboxError, pysoem.PacketError) as e:
+                # A reply that is wrong (abort, mailbox error, unexpected packet): a failure.
                 sdo["failed"] += 1
+                sdo_errors.append(f"phase {phase[0]}: {type(e).__name__}: {e}")
             time.sleep(0.005)
 
     master.always_release_gil = True
@@ -159,7 +169,10 @@ def main():
         print(f"  phase {p} ({name}): {cycles[p]} cycles, {wkc_errors[p]} WKC errors, "
               f"{lost[p]} lost frames")
     print(f"  SDO reads: {sdo['ok']} ok, {sdo['failed']} failed, {sdo['emergencies']} "
-          f"emergencies received; cycles late by >50 ms: {late[0]}")
+          f"emergencies received; timeouts (no reply): {sdo_timeouts[1]} in phase 1, "
+          f"{sdo_timeouts[2]} in phase 2; cycles late by >50 ms: {late[0]}")
+    for line in sdo_errors[:10]:
+        print(f"    {line}")
     print(f"  rackcat resident memory: {rss_start} KiB at start, {rss_end} KiB at end")
     ok = (wkc_errors[1] == 0 and wkc_errors[2] == 0 and sdo["failed"] == 0
           and rss_end <= rss_start + 512)
