@@ -82,6 +82,7 @@ UartDriver::UartDriver(const mdp::Module& m, coe::ObjectDictionary& od)
 
 UartDriver::~UartDriver() {
   stop_ptys();
+  for (auto& [object, hooks] : saved_hooks_) object->hooks = std::move(hooks);
 }
 
 void UartDriver::read_config() {
@@ -125,6 +126,12 @@ void UartDriver::apply_termios(size_t c) {
 }
 
 void UartDriver::install_hooks() {
+  // The dictionary outlives this driver: keep the hooks found there and put them back in the
+  // destructor, so no hook calls into a destroyed driver.
+  for (coe::Object* o : {config_, info_, tx_obj_[0], tx_obj_[1], tx_obj_[2], tx_obj_[3], rx_obj_[0],
+                         rx_obj_[1], rx_obj_[2], rx_obj_[3]}) {
+    if (o != nullptr) saved_hooks_.emplace_back(o, o->hooks);
+  }
   if (config_ != nullptr) {
     auto previous = config_->hooks.after_write;
     config_->hooks.after_write = [this, previous](coe::Object& o, int sub) {

@@ -33,6 +33,8 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "modules/byte_ring.hpp"
 #include "modules/card_driver.hpp"
@@ -128,6 +130,7 @@ class UartDriver final : public CardDriver {
   std::array<coe::Object*, 4> tx_obj_{};
   std::array<coe::Object*, 4> rx_obj_{};
   std::array<EntrySlot, 4> status_slots_, info_status_, info_errors_;
+  std::vector<std::pair<coe::Object*, coe::ObjectHooks>> saved_hooks_;
   std::thread thread_;
   std::atomic<bool> running_{false};
   int wake_fd_ = -1;
