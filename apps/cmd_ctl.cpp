@@ -197,6 +197,15 @@ void add_ctl(CLI::App& app) {
             {{"rim", o->rim}, {"state", o->state}, {"comm_error", o->comm_error}});
   });
 
+  CLI::App* mcm = ctl->add_subcommand("mcm-error", "set a RIM's safety-controller errors");
+  mcm->add_option("--rim", o->rim, "RIM number 1..5")->required();
+  mcm->add_option("--error", o->params,
+                  "slot_machine_mcm0, sout_compare_mcm0, slot_machine_mcm1, sout_compare_mcm1 "
+                  "(repeatable; none given = all cleared)");
+  mcm->callback([o] {
+    request(*o, "POST", "/api/rim/mcm", {{"rim", o->rim}, {"errors", o->params}});
+  });
+
   CLI::App* fan = ctl->add_subcommand("fan", "set a fan's RPM (nominal 3000)");
   fan->add_option("--rim", o->rim, "RIM number, 0 = control module CPU fan")->required();
   fan->add_option("--zone", o->zone, "cpu, power_supply or slot_card");

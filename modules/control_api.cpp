@@ -368,6 +368,32 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
     rack_.refresh();
     return {200, exceptions_json(rack_)};
   }
+  if (path == "/api/rim/mcm") {
+    if (!post) return wrong_method();
+    const auto rr = static_cast<uint8_t>(integer(body, "rim", 1, 5));
+    if (!rack_.rims().count(rr)) throw BadRequest(fmt::format("there is no RIM {}", rr));
+    const json& list = field(body, "errors");
+    if (!list.is_array()) throw BadRequest("'errors' must be an array (possibly empty)");
+    uint32_t bits = 0;
+    for (const json& e : list) {
+      const std::string name = e.is_string() ? e.get<std::string>() : std::string();
+      if (name == "slot_machine_mcm0")
+        bits |= rim_event::kSlotMachineMcm0;
+      else if (name == "sout_compare_mcm0")
+        bits |= rim_event::kSoutCompareMcm0;
+      else if (name == "slot_machine_mcm1")
+        bits |= rim_event::kSlotMachineMcm1;
+      else if (name == "sout_compare_mcm1")
+        bits |= rim_event::kSoutCompareMcm1;
+      else
+        throw BadRequest(
+            "'errors' entries are slot_machine_mcm0, sout_compare_mcm0, slot_machine_mcm1, "
+            "sout_compare_mcm1");
+    }
+    rack_.set_rim_mcm_errors(rr, bits);
+    rack_.refresh();
+    return {200, exceptions_json(rack_)};
+  }
   if (path == "/api/fan") {
     if (!post) return wrong_method();
     const auto rr = static_cast<uint8_t>(integer(body, "rim", 0, 5));

@@ -403,6 +403,18 @@ void Rack::set_fan_rpm(uint8_t rr, std::string_view zone, double rpm) {
   dirty_ = false;
 }
 
+void Rack::set_rim_mcm_errors(uint8_t rr, uint32_t bits) {
+  auto it = rims_.find(rr);
+  if (it == rims_.end()) throw std::invalid_argument(fmt::format("there is no RIM {}", rr));
+  constexpr uint32_t kMcm = rim_event::kSlotMachineMcm0 | rim_event::kSoutCompareMcm0 |
+                            rim_event::kSlotMachineMcm1 | rim_event::kSoutCompareMcm1;
+  if (bits & ~kMcm) throw std::invalid_argument("MCM error bits are 16..19 of 0x2rr1:08");
+  it->second.mcm_errors = bits;
+  publish_fans();
+  tree_.update();
+  dirty_ = false;
+}
+
 void Rack::publish_fans() {
   coe::ObjectDictionary& od = device_.dictionary();
   const double nominal = options_.fan_nominal_rpm;
@@ -423,6 +435,7 @@ void Rack::publish_fans() {
     uint32_t events = 0;
     if (rim.slot_card_fan) events |= fan_level_bits(slot_dev) << 8;    // Table 16 8-10
     if (rim.power_supply_fan) events |= fan_level_bits(ps_dev) << 12;  // 12-14
+    events |= rim.mcm_errors;
     tree_.set_rim_events(rr, events);
   }
   dirty_ = true;

@@ -64,6 +64,7 @@ struct RimStatus {
   bool slot_card_fan = true;
   double power_supply_rpm = 0.0;
   double slot_card_rpm = 0.0;
+  uint32_t mcm_errors = 0;        // active 0x2rr1:08 bits 16..19 (SLOT machine / SOUT compare)
   std::vector<uint16_t> modules;  // module numbers in this RIM
 };
 
@@ -114,6 +115,8 @@ class Rack : public mdp::CycleListener {
   void set_rim_state(uint8_t rim, RimState state, bool comm_error = false);
   // zone: "power_supply", "slot_card" for RIMs; rim 0 = the control module's CPU fan.
   void set_fan_rpm(uint8_t rim, std::string_view zone, double rpm);
+  // The RIM safety controllers' errors (0x2rr1:08 bits 16..19, rim_event::kSlotMachineMcm0 ...).
+  void set_rim_mcm_errors(uint8_t rim, uint32_t bits);
   double cpu_fan_rpm() const { return cpu_fan_rpm_; }
   void set_cpu_temperature(double celsius, bool publish_now);
   double cpu_temperature() const { return cpu_temp_; }

@@ -212,3 +212,16 @@ TEST_F(RackTest, CpuTemperatureHalfDegreeEveryThirtySeconds) {
   EXPECT_FLOAT_EQ(real(0x2000, 0x0F), 90.5f);
   EXPECT_TRUE(has_code(drain_emergencies(), 0x4210));
 }
+
+TEST_F(RackTest, SafetyControllerErrorsAreRimErrors) {
+  rack.set_rim_mcm_errors(1, rim_event::kSoutCompareMcm1);
+  EXPECT_EQ(obj(kRim1Info).get_u(8), (1u << 19) | 2u);
+  EXPECT_EQ(obj(0xF388).get_u(1), 1u << 1);
+  EXPECT_TRUE(has_code(drain_emergencies(), 0x6000));
+  rack.set_fan_rpm(1, "slot_card", 3000.0);  // fan updates keep the MCM cause
+  EXPECT_EQ(obj(0xF388).get_u(1), 1u << 1);
+  rack.set_rim_mcm_errors(1, 0);
+  EXPECT_EQ(obj(0xF388).get_u(1), 0u);
+  EXPECT_EQ(obj(kRim1Info).get_u(8), (1u << 19) | 2u);  // latched until 0xFBF1
+  EXPECT_THROW(rack.set_rim_mcm_errors(1, 1u << 3), std::invalid_argument);
+}
