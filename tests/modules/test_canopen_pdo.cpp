@@ -8,6 +8,7 @@
 #include "mdp/rack_config.hpp"
 #include "modules/canopen_rim_master.hpp"
 #include "modules/canopen_rim_node.hpp"
+#include "modules/canopen_rim_sources.hpp"
 #include "modules/canopen_virtual_bus.hpp"
 
 using namespace rackcat;
@@ -147,4 +148,39 @@ TEST(CanopenPdo, InputsAndOutputsCrossTheBus) {
   node.step(201'000);
   EXPECT_EQ(node.output(5, 12), 0.0);
   EXPECT_EQ(node.output(6, 3), 0.0);
+}
+
+TEST(CanopenRimSources, RackFileSourcesRunInTheRimProcess) {
+  const auto rack = mdp::default_rack();
+  VirtualCanBus bus;
+  RimNode rim1(rack, 1, bus.attach());
+  EXPECT_NO_THROW(apply_rack_sources(rim1, rack));
+  RimNode rim2(rack, 2, bus.attach());
+  EXPECT_NO_THROW(apply_rack_sources(rim2, rack));
+
+  // A loopback to another RIM's output cannot be seen from a separate RIM process.
+  const auto cross = mdp::parse_rack_config(R"(
+rims:
+  - rim: 1
+    type: 12-slot
+    slots:
+      - {slot: 1, card: CDO-10}
+  - rim: 2
+    type: 12-slot
+    slots:
+      - slot: 1
+        card: CDI-10
+        channels:
+          - {channel: 0, source: loopback, from: {rim: 1, slot: 1, channel: 0}}
+)",
+                                            "cross.yaml");
+  RimNode node(cross, 2, bus.attach());
+  try {
+    apply_rack_sources(node, cross);
+    FAIL() << "no error";
+  } catch (const mdp::ConfigError& e) {
+    EXPECT_EQ(e.file(), "cross.yaml");
+    EXPECT_EQ(e.line(), 13);
+    EXPECT_NE(e.problem().find("another RIM"), std::string::npos) << e.problem();
+  }
 }
