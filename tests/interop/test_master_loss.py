@@ -25,8 +25,8 @@ import time
 from rackcat_helpers import (CYCLE_S, DI_LOOPBACK_MODULE, DO_MODULE, DEFAULT_MODULES, cycle,
                              get_bits, go, open_master, pysoem, rackcat, read_pdo_map, set_bits,
                              to_op)
-from test_hostile_frames import FPRD, LRD, REG_AL_STATUS, REG_FMMU, REG_STATION, RawMaster, \
-    dgram, ecat_datagrams, phys
+from test_hostile_frames import (LRD, REG_AL_STATUS, REG_FMMU, REG_STATION, RawMaster, dgram,
+                                 ecat_datagrams)
 
 assert rackcat  # the fixture, imported for pytest
 
