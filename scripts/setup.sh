@@ -11,6 +11,7 @@ DEB_PACKAGES=(
   libeigen3-dev libpugixml-dev libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev
   nlohmann-json3-dev libcpp-httplib-dev libssl-dev zlib1g-dev
   iproute2 tshark libxml2-utils python3 python3-pip python3-venv
+  qemu-system-x86 linux-image-amd64 busybox-static
 )
 PY_PACKAGES=(pysoem pytest)
 
