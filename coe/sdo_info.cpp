@@ -181,8 +181,12 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
       if (!obj) {
         return info_error(reply, AbortCode::ObjectNotFound);
       }
+      // Padding entries inside the object's max subindex are described too (access 0): the
+      // object description announces them, and SOEM's ecx_readOE fails the whole object when
+      // one subindex up to MaxSub has no description. SDO upload/download of a padding
+      // subindex still aborts with 0x06090011.
       const Entry* e = obj->entry(data[2]);
-      if (!e || e->padding) {
+      if (!e) {
         return info_error(reply, AbortCode::SubindexNotFound);
       }
       return start_fragments(reply, InfoKind::Buffer, sdo_info::kGetEntryDescriptionResponse,
