@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include "coe/bits.hpp"
 #include "mdp/card_catalogue.hpp"
 #include "modules/analog_scale.hpp"
@@ -242,6 +244,13 @@ RimProfile rim_profile(const mdp::RackConfig& rack, uint8_t rim) {
   }
   lay_out(p.inputs, p.di_bytes, p.ai_words, p.tx_bytes);
   lay_out(p.outputs, p.do_bytes, p.ao_words, p.rx_bytes);
+  // PDO k >= 4 borrows the node-ID + 8 * (k / 4): it must stay a 7-bit node-ID.
+  const size_t most = std::max(p.tpdo_count(), p.rpdo_count());
+  if (rim > 7 || (most > 4 && rim + 8 * ((most - 1) / 4) > 127)) {
+    throw std::invalid_argument(fmt::format(
+        "RIM {} needs {} PDOs in one direction: the CAN RIM link carries at most {} for it", rim,
+        most, rim > 7 ? 4 : 4 * ((127 - rim) / 8 + 1)));
+  }
   return p;
 }
 

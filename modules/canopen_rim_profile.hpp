@@ -69,7 +69,8 @@ struct RimProfile {
 };
 
 // The profile of RIM `rim` of a rack file; throws std::invalid_argument when the rack has no
-// such RIM.
+// such RIM or its cards need more PDOs than the COB-ID scheme has for its node-ID (node-ID
+// <= 7; node-ID 1 carries up to 64 PDOs per direction = 512 bytes).
 RimProfile rim_profile(const mdp::RackConfig& rack, uint8_t rim);
 
 // COB-ID of TPDO (transmit = true) or RPDO number k (0-based) of a node.

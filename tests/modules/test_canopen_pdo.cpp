@@ -64,6 +64,47 @@ TEST(CanopenProfile, Cia401LayoutPerCardType) {
   EXPECT_EQ(p.output(7, 0), nullptr);  // the UART card has none
 }
 
+TEST(CanopenProfile, MoreProcessDataThanTheCobIdSchemeCarriesIsRefused) {
+  // 24 cards of 16 analog inputs: 768 bytes = 96 TPDOs, more than node-ID 1 has (64).
+  const auto rack = mdp::parse_rack_config(R"(
+rims:
+  - rim: 1
+    type: 24-slot
+    slots:
+      - {slot: 1, card: CAI-15}
+      - {slot: 2, card: CAI-15}
+      - {slot: 3, card: CAI-15}
+      - {slot: 4, card: CAI-15}
+      - {slot: 5, card: CAI-15}
+      - {slot: 6, card: CAI-15}
+      - {slot: 7, card: CAI-15}
+      - {slot: 8, card: CAI-15}
+      - {slot: 9, card: CAI-15}
+      - {slot: 10, card: CAI-15}
+      - {slot: 11, card: CAI-15}
+      - {slot: 12, card: CAI-15}
+      - {slot: 13, card: CAI-15}
+      - {slot: 14, card: CAI-15}
+      - {slot: 15, card: CAI-15}
+      - {slot: 16, card: CAI-15}
+      - {slot: 17, card: CAI-15}
+      - {slot: 18, card: CAI-15}
+      - {slot: 19, card: CAI-15}
+      - {slot: 20, card: CAI-15}
+      - {slot: 21, card: CAI-15}
+      - {slot: 22, card: CAI-15}
+      - {slot: 23, card: CAI-15}
+      - {slot: 24, card: CAI-15}
+)",
+                                           "big.yaml");
+  try {
+    rim_profile(rack, 1);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("96 PDOs"), std::string::npos) << e.what();
+  }
+}
+
 TEST(CanopenProfile, PdoCobIdsFollowThePredefinedConnectionSet) {
   EXPECT_EQ(pdo_cob_id(true, 0, 3), 0x183u);
   EXPECT_EQ(pdo_cob_id(true, 3, 3), 0x483u);
@@ -183,4 +224,15 @@ rims:
     EXPECT_EQ(e.line(), 13);
     EXPECT_NE(e.problem().find("another RIM"), std::string::npos) << e.problem();
   }
+}
+
+TEST(CanopenProfile, DefaultRackPdoCountsAsDocumented) {
+  // docs/CAN.md "Limits": the bus load of the default rack at a 1 ms PDO cycle.
+  const auto rack = mdp::default_rack();
+  const RimProfile r1 = rim_profile(rack, 1);
+  const RimProfile r2 = rim_profile(rack, 2);
+  EXPECT_EQ(r1.tpdo_count(), 14u);
+  EXPECT_EQ(r1.rpdo_count(), 8u);
+  EXPECT_EQ(r2.tpdo_count(), 7u);
+  EXPECT_EQ(r2.rpdo_count(), 1u);
 }
