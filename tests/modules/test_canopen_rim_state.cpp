@@ -8,6 +8,7 @@
 #include "modules/canopen_rack_link.hpp"
 #include "modules/canopen_rim_master.hpp"
 #include "modules/canopen_rim_node.hpp"
+#include "modules/canopen_threaded_link.hpp"
 #include "modules/canopen_virtual_bus.hpp"
 #include "rack_fixture.hpp"
 
@@ -228,4 +229,62 @@ TEST_F(RimLinkRack, FanEmcySetsTheRimFanEventBits) {
   EXPECT_TRUE(bits & rim_event::kSlotFanWarning);
   EXPECT_TRUE(bits & rim_event::kSlotFanError);
   EXPECT_TRUE(bits & rim_event::kSlotFanFailure);
+}
+
+// The link `rackcat run --rim-bus can:IFACE` uses, driven without its thread: inputs and
+// outputs cross through the mirrors, state changes through the post function.
+namespace {
+class ForwardingBus final : public CanBus {
+ public:
+  explicit ForwardingBus(CanBus& to) : to_(to) {}
+  bool send(const CanFrame& f) override { return to_.send(f); }
+  bool receive(CanFrame& f) override { return to_.receive(f); }
+  void wait(Micros us) override { to_.wait(us); }
+  const BusStatus& status() const override { return to_.status(); }
+
+ private:
+  CanBus& to_;
+};
+}  // namespace
+
+TEST_F(RimLinkRack, ThreadedLinkCarriesInputsOutputsAndStates) {
+  master_ep.set_connected(false);  // the fixture's master stays out of this test
+  auto& link_ep = bus.attach();
+  std::vector<std::function<void()>> posted;
+  ThreadedRimLink link(
+      rack, std::make_unique<ForwardingBus>(link_ep), RimMasterOptions{}, {2},
+      [&](std::function<void()> f) { posted.push_back(std::move(f)); },
+      /*start_thread=*/false);
+  EXPECT_EQ(obj(0x2021).get_u(8) & 3u, 0u);  // OFFLINE until the heartbeat comes
+  node = std::make_unique<RimNode>(device.config(), 2, node_ep);
+  node->set_source(3, 4, std::make_unique<ConstantSource>(1.0));  // CDI-10/X8 channel 4
+  node->start(now);
+  to_op();
+  for (int i = 0; i < 100; ++i) {
+    now += kMs;
+    node->step(now);
+    link.poll(now);
+    for (auto& f : posted) f();
+    posted.clear();
+    cycle();
+  }
+  EXPECT_EQ(link.master().state(2), RimState::Online) << link.master().reason(2);
+  EXPECT_EQ(obj(0x2021).get_u(8) & 3u, 2u);
+  EXPECT_EQ(at(2, 3).inputs()[4].value, 1.0);
+  EXPECT_EQ(at(2, 3).inputs()[3].value, 0.0);
+  // An output driven in the rack reaches the RIM: drive CDO-10 (slot 7) channel 2 through
+  // its 0x7nn0 object as the master's output data would.
+  CardDriver& dout = at(2, 7);
+  module_obj(dout, 0x7000, 0).set_u(1, 1u << 2);
+  for (int i = 0; i < 10; ++i) {
+    now += kMs;
+    node->step(now);
+    link.poll(now);
+    for (auto& f : posted) f();
+    posted.clear();
+    cycle();
+  }
+  EXPECT_EQ(dout.outputs()[2].driven, 1.0);
+  EXPECT_EQ(node->output(7, 2), 1.0);
+  EXPECT_EQ(node->output(7, 3), 0.0);
 }
