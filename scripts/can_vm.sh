@@ -81,6 +81,7 @@ mount -t proc proc /proc
 mount -t sysfs sys /sys
 mount -t devtmpfs dev /dev
 for m in can can-raw can-dev vcan; do insmod /modules/$m.ko || echo "insmod $m failed"; done
+ip link set lo up
 ip link add dev vcan0 type vcan && ip link set vcan0 up
 /bin/can_vm_test /bin/rackcat vcan0
 reboot -f
