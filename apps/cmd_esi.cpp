@@ -6,6 +6,7 @@
 #include <string>
 
 #include "apps/commands.hpp"
+#include "apps/rack_loading.hpp"
 #include "esi/rack.hpp"
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"
@@ -19,16 +20,9 @@ struct EsiOptions {
 };
 
 int run_esi(const EsiOptions& o) {
-  std::unique_ptr<mdp::Device> device;
-  try {
-    auto config = o.config.empty() ? mdp::default_rack() : mdp::load_rack_config(o.config);
-    mdp::DeviceOptions options;
-    options.load_stored_parameters = false;
-    device = std::make_unique<mdp::Device>(std::move(config), options);
-  } catch (const mdp::ConfigError& e) {
-    std::cerr << e.what() << "\n";
-    return 2;
-  }
+  auto config = load_rack_or_report(o.config);
+  if (!config) return 2;
+  const std::unique_ptr<mdp::Device> device = offline_device(std::move(*config));
   std::string xml;
   try {
     xml = esi::write_esi(*device);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "apps/commands.hpp"
+#include "apps/rack_loading.hpp"
 #include "coe/data_type.hpp"
 #include "coe/object_dictionary.hpp"
 #include "mdp/device.hpp"
@@ -168,16 +169,11 @@ void print_json(coe::ObjectDictionary& od) {
 }
 
 void run_od(const OdOptions& opt) {
-  mdp::RackConfig config;
-  try {
-    config = opt.config.empty() ? mdp::default_rack() : mdp::load_rack_config(opt.config);
-  } catch (const mdp::ConfigError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    exit_with(2);
-  }
+  auto config = load_rack_or_report(opt.config);
+  if (!config) exit_with(2);
   mdp::DeviceOptions dopt;
   dopt.state_dir = opt.state_dir;
-  mdp::Device device(std::move(config), dopt);
+  mdp::Device device(std::move(*config), dopt);
   if (opt.format == "json") {
     print_json(device.dictionary());
   } else {

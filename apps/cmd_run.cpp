@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "apps/commands.hpp"
+#include "apps/rack_loading.hpp"
 #include "apps/rack_slave.hpp"
 #include "ecat/runner.hpp"
 #include "ecat/segment.hpp"
@@ -36,18 +37,17 @@ struct RunArgs {
   std::string user;
 };
 
-mdp::RackConfig load_config(const std::string& path) {
-  return path.empty() ? mdp::default_rack() : mdp::load_rack_config(path);
-}
-
 int run(const RunArgs& a) {
   // The configuration first: a bad file must not need a network interface to be reported.
   std::vector<std::unique_ptr<RackSlave>> racks;
   const std::string state_dir = a.state_dir.empty() ? mdp::default_state_dir() : a.state_dir;
+  const auto config = load_rack_or_report(a.config);
+  if (!config) return ecat::kExitUsage;
   try {
-    const mdp::RackConfig config = load_config(a.config);
+    // Channel sources of the rack file are parsed by the drivers: their errors are
+    // configuration errors too (FILE:LINE).
     for (int i = 0; i < a.slaves; ++i) {
-      racks.push_back(std::make_unique<RackSlave>(config, state_dir, i));
+      racks.push_back(std::make_unique<RackSlave>(*config, state_dir, i));
     }
   } catch (const mdp::ConfigError& e) {
     std::fprintf(stderr, "%s\n", e.what());

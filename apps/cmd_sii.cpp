@@ -8,6 +8,7 @@
 #include <string>
 
 #include "apps/commands.hpp"
+#include "apps/rack_loading.hpp"
 #include "esi/rack.hpp"
 #include "esi/sii_parser.hpp"
 #include "mdp/device.hpp"
@@ -40,16 +41,9 @@ int dump_image(const std::string& path) {
 }
 
 int write_image(const SiiOptions& o) {
-  std::unique_ptr<mdp::Device> device;
-  try {
-    auto config = o.config.empty() ? mdp::default_rack() : mdp::load_rack_config(o.config);
-    mdp::DeviceOptions options;
-    options.load_stored_parameters = false;
-    device = std::make_unique<mdp::Device>(std::move(config), options);
-  } catch (const mdp::ConfigError& e) {
-    std::cerr << e.what() << "\n";
-    return 2;
-  }
+  auto config = load_rack_or_report(o.config);
+  if (!config) return 2;
+  const std::unique_ptr<mdp::Device> device = offline_device(std::move(*config));
   esi::SiiImage image;
   try {
     image = esi::build_sii(*device);
