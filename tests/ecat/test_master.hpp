@@ -83,7 +83,6 @@ class TestMaster {
 
  private:
   Segment& segment_;
-  uint8_t next_index_ = 0;
 };
 
 uint16_t get16(const std::vector<uint8_t>& v, size_t at);
