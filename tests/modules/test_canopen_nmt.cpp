@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "modules/canopen_nmt.hpp"
+#include "modules/canopen_socketcan.hpp"
 #include "modules/canopen_virtual_bus.hpp"
 
 using namespace rackcat::modules::canopen;
@@ -103,4 +104,16 @@ TEST(CanopenVirtualBus, DeliversToEveryOtherEndpointOnly) {
   EXPECT_FALSE(b.send(heartbeat_frame(2, NmtState::Operational)));  // bus-off: nothing leaves
   EXPECT_EQ(b.status().tx_dropped, 1u);
   EXPECT_EQ(b.status().error_frames, 1u);
+}
+
+TEST(CanopenSocketCan, MissingInterfaceIsAnErrorNamingIt) {
+  // Without AF_CAN the socket fails, with it the interface lookup: either way the message
+  // names the interface and nothing is left open.
+  try {
+    SocketCanBus bus("rackcat-none0");
+    FAIL() << "opened a CAN interface that does not exist";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("rackcat-none0"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(SocketCanBus("an-interface-name-too-long"), std::runtime_error);
 }
