@@ -39,7 +39,7 @@ std::string hex_bytes(const std::vector<uint8_t>& b) {
 
 RimMaster::RimMaster(const mdp::RackConfig& rack, CanBus& bus, RimMasterOptions options,
                      std::vector<uint8_t> rims)
-    : bus_(bus), options_(options) {
+    : bus_(bus), options_(options), own_heartbeat_(options.heartbeat_period_us) {
   if (rims.empty()) {
     for (const mdp::Rim& r : rack.rims) rims.push_back(r.number);
   }
@@ -75,6 +75,9 @@ void RimMaster::step(Micros now) {
   CanFrame f;
   while (bus_.receive(f)) {
     handle(f, now);
+  }
+  if (own_heartbeat_.poll(now, kControlModuleNode, NmtState::Operational, f)) {
+    bus_.send(f);
   }
   while (auto lost = heartbeat_.poll_lost(now)) {
     Link& l = *link(*lost);

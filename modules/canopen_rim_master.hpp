@@ -33,6 +33,8 @@ struct RimMasterOptions {
   Micros sdo_retry_us = 200'000;  // pause before checking a RIM again after a failure
   int max_sdo_failures = 3;
   Micros pdo_period_us = 1'000;  // RPDO cycle to ONLINE RIMs
+  // The control module's own heartbeat (node-ID kControlModuleNode), which the RIMs consume.
+  Micros heartbeat_period_us = 50'000;
 };
 
 using RimStateFn = std::function<void(uint8_t rim, RimState state, bool comm_error)>;
@@ -98,6 +100,7 @@ class RimMaster {
   CanBus& bus_;
   RimMasterOptions options_;
   HeartbeatConsumer heartbeat_;
+  HeartbeatProducer own_heartbeat_;
   std::map<uint8_t, Link> links_;
   RimStateFn on_state_;
   RimEmergencyFn on_emergency_;

@@ -8,7 +8,8 @@ RimNode::RimNode(const mdp::RackConfig& rack, uint8_t rim, CanBus& bus, RimNodeO
     : profile_(rim_profile(rack, rim)),
       bus_(bus),
       options_(options),
-      od_(rim_dictionary(profile_, static_cast<uint16_t>(options.heartbeat_period_us / 1000))),
+      od_(rim_dictionary(profile_, static_cast<uint16_t>(options.heartbeat_period_us / 1000),
+                         static_cast<uint16_t>(options.control_module_timeout_us / 1000))),
       sdo_(od_),
       can_sdo_(sdo_, rim),
       nmt_(rim),
@@ -18,6 +19,9 @@ RimNode::RimNode(const mdp::RackConfig& rack, uint8_t rim, CanBus& bus, RimNodeO
       rx_(profile_.rpdo_count() * kPdoBytes, 0) {
   for (size_t i = 0; i < profile_.inputs.size(); ++i) {
     sources_.push_back(std::make_unique<ConstantSource>(0.0));
+  }
+  if (options.control_module_timeout_us > 0) {
+    control_module_.watch(kControlModuleNode, options.control_module_timeout_us);
   }
   // 0x1017 written over SDO changes the producer period at once (CiA 301 §7.5.2.32).
   od_.find(0x1017)->hooks.after_write = [this](coe::Object& o, int) {
@@ -47,7 +51,18 @@ void RimNode::de_energise() {
 void RimNode::step(Micros now) {
   CanFrame f;
   while (bus_.receive(f)) {
+    control_module_.on_frame(f, now);
     handle(f, now);
+  }
+  if (control_module_.poll_lost(now)) {
+    // The control module is gone: outputs to the de-energised level (CiA 301 0x1029:01 = 0:
+    // OPERATIONAL -> PRE-OPERATIONAL) and tell the bus why.
+    ++counters_.control_module_losses;
+    if (nmt_.state() == NmtState::Operational) {
+      nmt_.on_frame(nmt_frame(NmtCommand::EnterPreOperational, profile_.rim));
+    }
+    de_energise();
+    pending_emcy_.push_back({0x8130, 0x11, {kControlModuleNode, 0, 0, 0, 0}});
   }
   for (const coe::Emergency& e : pending_emcy_) {
     if (bus_.send(emcy_frame(profile_.rim, e))) {

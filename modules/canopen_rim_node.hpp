@@ -23,6 +23,10 @@ namespace rackcat::modules::canopen {
 struct RimNodeOptions {
   Micros heartbeat_period_us = 50'000;  // 0x1017
   Micros pdo_period_us = 1'000;         // TPDO cycle while OPERATIONAL
+  // 0x1016: the control module's heartbeat must come within this time once it has been seen,
+  // or the RIM de-energises its outputs, enters PRE-OPERATIONAL (CiA 301 0x1029 default) and
+  // sends EMCY 0x8130 (life guard / heartbeat error). 0 = not watched.
+  Micros control_module_timeout_us = 500'000;
 };
 
 struct RimNodeCounters {
@@ -31,6 +35,7 @@ struct RimNodeCounters {
   uint64_t sdo_requests = 0;
   uint64_t emergencies_sent = 0;
   uint64_t resets = 0;
+  uint64_t control_module_losses = 0;
 };
 
 class RimNode {
@@ -72,6 +77,7 @@ class RimNode {
   CanSdoServer can_sdo_;
   NmtSlave nmt_;
   HeartbeatProducer heartbeat_;
+  HeartbeatConsumer control_module_;
   std::vector<std::unique_ptr<Source>> sources_;  // parallel to profile_.inputs
   std::vector<double> outputs_;                   // parallel to profile_.outputs
   std::vector<uint8_t> tx_, rx_;

@@ -322,7 +322,8 @@ double get_channel(std::span<const uint8_t> stream, const RimChannel& c) {
   return decode_channel(c, coe::get_le16(&stream[c.offset]));
 }
 
-coe::ObjectDictionary rim_dictionary(const RimProfile& p, uint16_t heartbeat_ms) {
+coe::ObjectDictionary rim_dictionary(const RimProfile& p, uint16_t heartbeat_ms,
+                                     uint16_t consumer_ms) {
   using coe::DataType;
   namespace access = coe::access;
   coe::ObjectDictionary od;
@@ -343,6 +344,17 @@ coe::ObjectDictionary rim_dictionary(const RimProfile& p, uint16_t heartbeat_ms)
   add_var(od, 0x100A, "Manufacturer software version", DataType::VisibleString,
           static_cast<uint16_t>(8 * sw.size()), access::kRo,
           std::vector<uint8_t>(sw.begin(), sw.end()));
+  // 0x1016:01 consumer heartbeat time: bits 23..16 node-ID, 15..0 time in ms (CiA 301 §7.5.2.31).
+  {
+    coe::Object obj(0x1016, coe::ObjectCode::Array, "Consumer heartbeat time",
+                    static_cast<uint16_t>(DataType::Unsigned32));
+    obj.add(make_entry(0, "Highest sub-index supported", DataType::Unsigned8, 8, access::kRo,
+                       std::vector<uint8_t>{1}));
+    obj.add(make_entry(1, "Consumer heartbeat time 1", DataType::Unsigned32, 32, access::kRo,
+                       le32(consumer_ms ? (uint32_t{kControlModuleNode} << 16) | consumer_ms : 0)));
+    obj.finalize();
+    od.add(std::move(obj));
+  }
   std::vector<uint8_t> hb(2);
   coe::put_le16(hb.data(), heartbeat_ms);
   add_var(od, 0x1017, "Producer heartbeat time", DataType::Unsigned16, 16, access::kRw, hb);

@@ -49,6 +49,10 @@ struct RimIdentity {
 };
 
 inline constexpr size_t kPdoBytes = 8;
+// The control module's own node-ID: it produces a heartbeat the RIMs consume (0x1016), so a
+// RIM that loses its control module de-energises its outputs. 0x7F is above every RIM's
+// node-ID and its heartbeat COB-ID (0x77F) is no PDO's.
+inline constexpr uint8_t kControlModuleNode = 0x7F;
 inline constexpr uint16_t kCardListIndex = 0x2001;
 
 struct RimProfile {
@@ -86,7 +90,9 @@ void put_channel(std::span<uint8_t> stream, const RimChannel& c, double value);
 double get_channel(std::span<const uint8_t> stream, const RimChannel& c);
 
 // The RIM's object dictionary (CiA 301 communication area + CiA 401 I/O objects).
-coe::ObjectDictionary rim_dictionary(const RimProfile& profile, uint16_t heartbeat_ms);
+// `consumer_ms` is 0x1016:01's time for the control module's heartbeat (0 = not watched).
+coe::ObjectDictionary rim_dictionary(const RimProfile& profile, uint16_t heartbeat_ms,
+                                     uint16_t consumer_ms = 0);
 // Copies a stream into the I/O objects (0x6000+0x6401 for transmit, 0x6200+0x6411 for
 // receive) so SDO reads see the same values as the PDOs.
 void stream_to_objects(coe::ObjectDictionary& od, const RimProfile& p, bool transmit,

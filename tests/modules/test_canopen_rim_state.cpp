@@ -288,3 +288,24 @@ TEST_F(RimLinkRack, ThreadedLinkCarriesInputsOutputsAndStates) {
   EXPECT_EQ(node->output(7, 2), 1.0);
   EXPECT_EQ(node->output(7, 3), 0.0);
 }
+
+TEST_F(RimLink, RimThatLosesTheControlModuleDeEnergisesItsOutputs) {
+  double on = 1.0;
+  ASSERT_TRUE(master.bind_output(2, 7, 0, &on));  // CDO-10 in slot 7 of RIM 2
+  start_node();
+  run_for(100 * kMs);
+  ASSERT_EQ(master.state(2), RimState::Online);
+  EXPECT_EQ(node->output(7, 0), 1.0);
+  // The control module stops (its heartbeat, 0x77F, and its RPDOs end).
+  master_ep.set_connected(false);
+  for (int i = 0; i < 600; ++i) node->step(now += kMs);
+  EXPECT_EQ(node->output(7, 0), 0.0);
+  EXPECT_EQ(node->state(), NmtState::PreOperational);
+  EXPECT_EQ(node->counters().control_module_losses, 1u);
+  bool emcy = false;
+  for (const CanFrame& f : bus.log()) {
+    if (f.id == 0x082 && f.data[0] == 0x30 && f.data[1] == 0x81) emcy = true;  // 0x8130
+  }
+  EXPECT_TRUE(emcy);
+  EXPECT_EQ(node->dictionary().find(0x1016)->get_u(1), (0x7Fu << 16) | 500u);
+}
