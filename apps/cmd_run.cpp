@@ -76,6 +76,13 @@ int run(const RunArgs& a) {
         });
   }
 
+  // 0xFBF0 device reset: the rack restarts its ESC side too (back to INIT, no error).
+  for (size_t i = 0; i < racks.size(); ++i) {
+    racks[i]->set_restart_handler([&runner, &segment, i] {
+      runner.loop().post([&segment, i] { segment.slave(i).esc().application_restart(); });
+    });
+  }
+
   const auto& cfg = racks.front()->device().config();
   std::printf("rackcat: %d slave(s) on %s (%s), rack %s: %zu RIM(s), %zu module(s)\n", a.slaves,
               a.iface.c_str(), a.busy_poll ? "busy-poll" : "blocking", cfg.source.c_str(),

@@ -22,10 +22,12 @@ RackSlave::RackSlave(mdp::RackConfig config, const std::string& state_dir, int p
   options.state_dir = position == 0 ? state_dir : state_dir + "/slave-" + std::to_string(position);
   device_ = std::make_unique<mdp::Device>(for_position(std::move(config), position), options);
   rack_ = std::make_unique<modules::Rack>(*device_);
+  device_->add_listener(this);
   sii_ = esi::build_sii(*device_).bytes;
 }
 
 RackSlave::~RackSlave() {
+  device_->remove_listener(this);
   rack_->stop_control_api();
   rack_.reset();  // detaches from the device before the device goes
 }
@@ -48,7 +50,18 @@ size_t RackSlave::on_mailbox(std::span<const uint8_t> request, std::span<uint8_t
 }
 
 size_t RackSlave::poll_mailbox(std::span<uint8_t> reply) {
+  // SM1 is free: the master has read the answer to the reset command, so the restart no
+  // longer swallows it.
+  if (restart_pending_) {
+    restart_pending_ = false;
+    if (restart_) restart_();
+    return 0;
+  }
   return device_->poll_mailbox(reply);
+}
+
+void RackSlave::on_device_reset(mdp::Device&, bool /*factory*/) {
+  restart_pending_ = true;
 }
 
 void RackSlave::update_inputs(std::span<uint8_t> inputs) {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -17,7 +18,7 @@
 
 namespace rackcat::apps {
 
-class RackSlave final : public ecat::Application {
+class RackSlave final : public ecat::Application, private mdp::CycleListener {
  public:
   // `position` (0-based) distinguishes the slaves of a segment: it is added to the serial
   // number (0x1018:04, SII word 0x0E) and names the slave's own state directory.
@@ -25,6 +26,10 @@ class RackSlave final : public ecat::Application {
   ~RackSlave() override;
 
   mdp::Device& device() { return *device_; }
+  // Called (on the ESC's thread) when the device reset command 0xFBF0 has been answered and
+  // the master has read the answer: the owner restarts the ESC's application side
+  // (ecat::Esc::application_restart).
+  void set_restart_handler(std::function<void()> fn) { restart_ = std::move(fn); }
   modules::Rack& rack() { return *rack_; }
 
   std::span<const uint8_t> eeprom() const override { return sii_; }
@@ -42,6 +47,10 @@ class RackSlave final : public ecat::Application {
   std::unique_ptr<mdp::Device> device_;
   std::unique_ptr<modules::Rack> rack_;  // the slot cards; a CycleListener of device_
   std::vector<uint8_t> sii_;
+  std::function<void()> restart_;
+  bool restart_pending_ = false;
+
+  void on_device_reset(mdp::Device&, bool factory) override;
 };
 
 }  // namespace rackcat::apps

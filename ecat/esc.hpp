@@ -95,6 +95,11 @@ class Esc {
   // `code` in 0x0134 until the master acknowledges. E.g. a RIM lost with Detect Modules
   // Override 0 in OP: SAFEOP with the device's code.
   void application_error(AlState fall_to, uint16_t code);
+  // The local application restarted (e.g. the device reset command 0xFBF0, ETG.5003.1): the
+  // ESM is back in INIT with no error, as after the application's own power-on; the master
+  // sees INIT in 0x0130 and configures the slave again. Registers the master wrote (station
+  // address, SM/FMMU settings) are kept, as they are when only the µC behind an ESC resets.
+  void application_restart();
 
   // ---- observers (tests, CLI, the link) -------------------------------------------------------
   AlState al_state() const { return state_; }

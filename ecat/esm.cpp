@@ -251,6 +251,16 @@ void Esc::application_error(AlState fall_to, uint16_t code) {
   esm_error(step_down ? fall_to : state_, code);
 }
 
+void Esc::application_restart() {
+  mem_[reg::kAlStatus] &= static_cast<uint8_t>(~kErrorFlag);
+  le::put16(&mem_[reg::kAlStatusCode], 0);
+  if (state_ != AlState::Init) {
+    esm_enter(AlState::Init);
+  } else {
+    esm_write_status();
+  }
+}
+
 void Esc::esm_error(AlState stay_or_fall_to, uint16_t code) {
   if (stay_or_fall_to != state_) esm_enter(stay_or_fall_to);
   mem_[reg::kAlStatus] |= kErrorFlag;

@@ -180,3 +180,29 @@ def test_detect_modules_after_rim_loss_and_configured_list(rackcat):
     finally:
         master.close()
     rc.stop()
+
+
+def test_device_reset_command_restarts_the_slave_in_init(rackcat):
+    """0xFBF0 "teser\\0" (device reset, docs/MDP.md): the master gets its SDO answer, then the
+    slave is back in INIT without an error, and a new scan takes it to PREOP again; a
+    parameter written but not stored is back at its power-on value."""
+    rc = rackcat()
+    master = open_master(rc.iface, 1)
+    try:
+        s = master.slaves[0]
+        s.sdo_write(0x2000, 4, b"10.1.2.3")  # written, not stored
+        s.sdo_write(0xFBF0, 1, b"teser\x00")
+        deadline = time.monotonic() + 2.0
+        while time.monotonic() < deadline:
+            master.read_state()
+            if s.state == pysoem.INIT_STATE:
+                break
+            time.sleep(0.01)
+        assert s.state == pysoem.INIT_STATE  # no error flag, no AL status code
+        assert s.al_status == 0
+        assert master.config_init() == 1
+        assert master.state_check(pysoem.PREOP_STATE, 2_000_000) == pysoem.PREOP_STATE
+        assert text(master.slaves[0], 0x2000, 4) == "192.168.9.50"
+    finally:
+        master.close()
+    rc.stop()
