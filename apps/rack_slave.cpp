@@ -22,12 +22,12 @@ RackSlave::RackSlave(mdp::RackConfig config, const std::string& state_dir, int p
   options.state_dir = position == 0 ? state_dir : state_dir + "/slave-" + std::to_string(position);
   device_ = std::make_unique<mdp::Device>(for_position(std::move(config), position), options);
   rack_ = std::make_unique<modules::Rack>(*device_);
-  device_->add_listener(this);
+  device_->add_listener(&reset_listener_);
   sii_ = esi::build_sii(*device_).bytes;
 }
 
 RackSlave::~RackSlave() {
-  device_->remove_listener(this);
+  device_->remove_listener(&reset_listener_);
   rack_->stop_control_api();
   rack_.reset();  // detaches from the device before the device goes
 }
@@ -58,10 +58,6 @@ size_t RackSlave::poll_mailbox(std::span<uint8_t> reply) {
     return 0;
   }
   return device_->poll_mailbox(reply);
-}
-
-void RackSlave::on_device_reset(mdp::Device&, bool /*factory*/) {
-  restart_pending_ = true;
 }
 
 void RackSlave::update_inputs(std::span<uint8_t> inputs) {

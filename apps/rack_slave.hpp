@@ -18,7 +18,7 @@
 
 namespace rackcat::apps {
 
-class RackSlave final : public ecat::Application, private mdp::CycleListener {
+class RackSlave final : public ecat::Application {
  public:
   // `position` (0-based) distinguishes the slaves of a segment: it is added to the serial
   // number (0x1018:04, SII word 0x0E) and names the slave's own state directory.
@@ -50,7 +50,13 @@ class RackSlave final : public ecat::Application, private mdp::CycleListener {
   std::function<void()> restart_;
   bool restart_pending_ = false;
 
-  void on_device_reset(mdp::Device&, bool factory) override;
+  // Hears the device reset command (0xFBF0) among the device's listeners.
+  struct ResetListener final : mdp::CycleListener {
+    explicit ResetListener(RackSlave& s) : slave(s) {}
+    void on_device_reset(mdp::Device&, bool /*factory*/) override { slave.restart_pending_ = true; }
+    RackSlave& slave;
+  };
+  ResetListener reset_listener_{*this};
 };
 
 }  // namespace rackcat::apps
