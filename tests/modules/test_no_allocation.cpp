@@ -13,9 +13,18 @@ std::atomic<bool> g_counting{false};
 std::atomic<size_t> g_allocations{0};
 }  // namespace
 
+// AddressSanitizer owns operator new (all its variants, nothrow included); the sanitizer build
+// checks memory errors, the regular build checks allocations. GCC says __SANITIZE_ADDRESS__,
+// clang __has_feature(address_sanitizer).
 #if defined(__SANITIZE_ADDRESS__)
-// AddressSanitizer owns operator new; the sanitizer build checks memory errors, the regular
-// build checks allocations.
+#define RACKCAT_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define RACKCAT_UNDER_ASAN 1
+#endif
+#endif
+
+#if defined(RACKCAT_UNDER_ASAN)
 #define RACKCAT_COUNT_ALLOCATIONS 0
 #else
 #define RACKCAT_COUNT_ALLOCATIONS 1
