@@ -24,12 +24,11 @@ struct Setup {
   Rack rack;
   std::vector<uint8_t> sm2, sm3;
 
-  Setup()
-      : device(mdp::default_rack(), options()), rack(device, rack_options(&clock)) {
+  Setup() : device(mdp::default_rack(), options()), rack(device, rack_options(&clock)) {
     const uint16_t tc = rack.driver_at(1, 15)->module().number;
-    rack.set_source(tc, 0, "plant",
-                    {{"plant", "oven"}, {"a", "-0.1"}, {"b", "5"}, {"c", "1"},
-                     {"inputs", "1.11.0"}});
+    rack.set_source(
+        tc, 0, "plant",
+        {{"plant", "oven"}, {"a", "-0.1"}, {"b", "5"}, {"c", "1"}, {"inputs", "1.11.0"}});
     device.state_changed(coe::EsmState::Init, coe::EsmState::PreOp);
     device.state_changed(coe::EsmState::PreOp, coe::EsmState::SafeOp);
     device.state_changed(coe::EsmState::SafeOp, coe::EsmState::Op);

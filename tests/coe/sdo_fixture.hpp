@@ -21,7 +21,7 @@ inline Bytes coe_message(uint8_t counter, uint8_t service, const Bytes& body) {
   m[0] = static_cast<uint8_t>(len);
   m[1] = static_cast<uint8_t>(len >> 8);
   m[5] = static_cast<uint8_t>(0x03 | (counter << 4));  // CoE, counter in bits 4-6
-  m[7] = static_cast<uint8_t>(service << 4);            // CoE service in bits 12-15
+  m[7] = static_cast<uint8_t>(service << 4);           // CoE service in bits 12-15
   std::copy(body.begin(), body.end(), m.begin() + 8);
   return m;
 }
