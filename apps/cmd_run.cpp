@@ -43,6 +43,7 @@ int run(const RunArgs& a) {
   const std::string state_dir = a.state_dir.empty() ? mdp::default_state_dir() : a.state_dir;
   const auto config = load_rack_or_report(a.config);
   if (!config) return ecat::kExitUsage;
+  racks.reserve(static_cast<size_t>(a.slaves));
   try {
     // Channel sources of the rack file are parsed by the drivers: their errors are
     // configuration errors too (FILE:LINE).

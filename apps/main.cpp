@@ -1,5 +1,6 @@
 // rackcat: an emulated EtherCAT modular I/O rack. See README.md.
 #include <cstdio>
+#include <exception>
 #include <map>
 #include <string>
 
@@ -43,6 +44,10 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   } catch (const rackcat::apps::ExitRequest& r) {
     return r.code;
+  } catch (const std::exception& e) {
+    // Anything a subcommand did not turn into its own message: one line, never a crash.
+    std::fprintf(stderr, "rackcat: %s\n", e.what());
+    return 1;
   }
   return 0;
 }

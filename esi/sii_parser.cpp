@@ -11,8 +11,8 @@ namespace {
 
 using Bytes = std::span<const uint8_t>;
 
-[[noreturn]] void fail(std::string message) {
-  throw SiiParseError(std::move(message));
+[[noreturn]] void fail(const std::string& message) {
+  throw SiiParseError(message);
 }
 
 const char* category_name(uint16_t type) {

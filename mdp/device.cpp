@@ -172,8 +172,9 @@ struct Device::Impl {
 
   // Wraps the builder's byte-sequence check of a command object with `execute`, run once the
   // bytes are accepted; `apply` runs after the write is committed.
-  void command_hooks(uint16_t index, std::function<AbortCode(std::span<const uint8_t>)> execute,
-                     std::function<void(Object&)> apply) {
+  void command_hooks(uint16_t index,
+                     const std::function<AbortCode(std::span<const uint8_t>)>& execute,
+                     const std::function<void(Object&)>& apply) {
     Object* o = od.find(index);
     auto check = o->hooks.validate_write;
     o->hooks.validate_write = [this, check, execute](const Object& obj, int subindex,

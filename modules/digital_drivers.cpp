@@ -45,7 +45,7 @@ class DigitalInputDriver final : public CardDriver {
     if (samples_ > 1) {
       raw_ = obj_.bytes(1);
       sample_bytes_ = card().channels > 8 ? 2 : 1;
-      if (raw_.size() < static_cast<size_t>(samples_ * sample_bytes_))
+      if (raw_.size() < static_cast<size_t>(samples_) * sample_bytes_)
         throw std::runtime_error(fmt::format("module {}: sample array too small", m.number));
     }
   }
