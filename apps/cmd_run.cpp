@@ -1,7 +1,7 @@
 // `rackcat run`: the emulated rack(s) on a network interface, answering a real master.
 //
 //   rackcat run --iface IFACE [--config FILE] [--slaves N] [--busy-poll] [--pcap FILE]
-//               [--state-dir DIR] [--control-port P] [--user USER]
+//               [--state-dir DIR] [--control-port P] [--user USER] [--rim-bus can:IFACE]
 //
 // Opens the raw socket (needs CAP_NET_RAW), drops every privilege, builds N racks from the
 // configuration (each its own ESC, object dictionary, drivers and stored parameters), starts
@@ -19,6 +19,8 @@
 #include "ecat/runner.hpp"
 #include "ecat/segment.hpp"
 #include "mdp/rack_config.hpp"
+#include "modules/canopen_socketcan.hpp"
+#include "modules/canopen_threaded_link.hpp"
 #include "modules/control_api.hpp"
 
 namespace rackcat::apps {
@@ -35,6 +37,7 @@ struct RunArgs {
   bool no_control = false;
   bool no_ptys = false;
   std::string user;
+  std::string rim_bus;  // "can:IFACE": RIMs are CANopen nodes on that bus (docs/CAN.md)
 };
 
 int run(const RunArgs& a) {
@@ -101,6 +104,21 @@ int run(const RunArgs& a) {
       std::fprintf(stderr, "rackcat: control API not started: %s\n", e.what());
     }
   }
+  // RIMs on a CAN bus (docs/CAN.md): slave 0's rack follows their heartbeats and PDOs.
+  std::unique_ptr<modules::canopen::ThreadedRimLink> rim_link;
+  if (!a.rim_bus.empty()) {
+    try {
+      rim_link = std::make_unique<modules::canopen::ThreadedRimLink>(
+          racks.front()->rack(),
+          std::make_unique<modules::canopen::SocketCanBus>(a.rim_bus.substr(4)),
+          modules::canopen::RimMasterOptions{}, std::vector<uint8_t>{},
+          [&runner](std::function<void()> f) { runner.loop().post(std::move(f)); });
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "rackcat: --rim-bus %s: %s\n", a.rim_bus.c_str(), e.what());
+      return ecat::kExitUsage;
+    }
+    std::printf("rackcat: RIMs on CAN interface %s\n", a.rim_bus.c_str() + 4);
+  }
   if (!a.pcap.empty()) std::printf("rackcat: capturing to %s\n", a.pcap.c_str());
   std::fflush(stdout);
 
@@ -129,6 +147,13 @@ void add_run(CLI::App& app) {
   cmd->add_flag("--no-control", args->no_control, "do not start the control API");
   cmd->add_flag("--no-pty", args->no_ptys, "do not create UART pseudo-terminals");
   cmd->add_option("--user", args->user, "user to run as once the socket is open");
+  cmd->add_option("--rim-bus", args->rim_bus,
+                  "can:IFACE: the RIMs are CANopen nodes on this SocketCAN interface "
+                  "(`rackcat rim`); default: in-process")
+      ->check([](const std::string& v) {
+        return v.rfind("can:", 0) == 0 && v.size() > 4 ? std::string()
+                                                       : std::string("expected can:IFACE");
+      });
   cmd->callback([args] { exit_with(run(*args)); });
 }
 
