@@ -15,6 +15,7 @@
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"
 #include "mdp/sync_manager_layout.hpp"
+#include "tests/esi/rack_files.hpp"
 
 namespace rackcat::esi {
 namespace {
@@ -23,21 +24,6 @@ mdp::DeviceOptions no_state() {
   mdp::DeviceOptions o;
   o.load_stored_parameters = false;
   return o;
-}
-
-// 120 modules: five 24-slot RIMs filled with the catalogue cards in turn.
-std::string full_rack_yaml() {
-  std::string yaml = "rims:\n";
-  auto cards = mdp::card_catalogue();
-  for (int rim = 1; rim <= 5; ++rim) {
-    yaml += "  - rim: " + std::to_string(rim) + "\n    type: 24-slot\n    slots:\n";
-    for (int slot = 1; slot <= 24; ++slot) {
-      const auto& card = cards[static_cast<size_t>((rim - 1) * 24 + slot - 1) % cards.size()];
-      yaml += "      - {slot: " + std::to_string(slot) + ", card: \"" + std::string(card.name) +
-              "\"}\n";
-    }
-  }
-  return yaml;
 }
 
 bool is_module_object(uint16_t index) {
@@ -142,7 +128,7 @@ void BM_SiiAndEsi255Modules(benchmark::State& state) {
 BENCHMARK(BM_SiiAndEsi255Modules)->Unit(benchmark::kMillisecond);
 
 void BM_SiiAndEsi120ModuleRackFile(benchmark::State& state) {
-  mdp::Device device(mdp::parse_rack_config(full_rack_yaml(), "<120 modules>"), no_state());
+  mdp::Device device(mdp::parse_rack_config(testing::rack_120_yaml(), "<120 modules>"), no_state());
   for (auto _ : state) {
     auto sii = build_sii(device);
     auto xml = write_esi(device);
@@ -154,7 +140,7 @@ void BM_SiiAndEsi120ModuleRackFile(benchmark::State& state) {
 BENCHMARK(BM_SiiAndEsi120ModuleRackFile)->Unit(benchmark::kMillisecond);
 
 void BM_SiiOnly120ModuleRackFile(benchmark::State& state) {
-  mdp::Device device(mdp::parse_rack_config(full_rack_yaml(), "<120 modules>"), no_state());
+  mdp::Device device(mdp::parse_rack_config(testing::rack_120_yaml(), "<120 modules>"), no_state());
   for (auto _ : state) {
     auto sii = build_sii(device);
     benchmark::DoNotOptimize(sii.bytes.data());

@@ -16,6 +16,7 @@
 #include "mdp/rack_config.hpp"
 #include "mdp/sync_manager_layout.hpp"
 #include "tests/esi/esi_checks.hpp"
+#include "tests/esi/rack_files.hpp"
 
 namespace rackcat::esi {
 namespace {
@@ -26,24 +27,10 @@ mdp::DeviceOptions no_state() {
   return o;
 }
 
-std::string rack_120_yaml() {
-  std::string yaml = "rims:\n";
-  auto cards = mdp::card_catalogue();
-  for (int rim = 1; rim <= 5; ++rim) {
-    yaml += "  - rim: " + std::to_string(rim) + "\n    type: 24-slot\n    slots:\n";
-    for (int slot = 1; slot <= 24; ++slot) {
-      const auto& card = cards[static_cast<size_t>((rim - 1) * 24 + slot - 1) % cards.size()];
-      yaml += "      - {slot: " + std::to_string(slot) + ", card: \"" + std::string(card.name) +
-              "\"}\n";
-    }
-  }
-  return yaml;
-}
-
 mdp::RackConfig rack(const std::string& which) {
   if (which == "tiny") return mdp::load_rack_config(RACKCAT_ESI_TEST_DATA "/tiny-rack.yaml");
   if (which == "default") return mdp::default_rack();
-  return mdp::parse_rack_config(rack_120_yaml(), "<120 modules>");
+  return mdp::parse_rack_config(testing::rack_120_yaml(), "<120 modules>");
 }
 
 class RackEsi : public ::testing::TestWithParam<std::string> {
