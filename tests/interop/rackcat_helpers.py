@@ -346,6 +346,21 @@ def set_bits(image, entry, v):
     return value.to_bytes(len(image), "little")
 
 
+def wait_loopback(master, do, di, value, cycles=300):
+    """Writes `value` to the DO card's entry `do` and cycles until the loopback-wired DI card's
+    entry `di` shows it; returns what the DI card showed last."""
+    s = master.slaves[0]
+    got = None
+    for _ in range(cycles):
+        s.output = set_bits(s.output, do, value)
+        cycle(master)
+        got = get_bits(s.input, di)
+        if got == value:
+            return got
+        time.sleep(0.001)
+    return got
+
+
 def check_capture(pcap):
     """Every captured frame dissects as EtherCAT and tshark finds nothing malformed."""
     total, ecat, bad = tshark_problems(pcap)

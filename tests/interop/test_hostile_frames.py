@@ -15,8 +15,8 @@ import socket
 import struct
 import time
 
-from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, cycle, get_bits, go, open_master,
-                             pysoem, rackcat, read_pdo_map, set_bits, to_op)
+from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, go, open_master, pysoem, rackcat,
+                             read_pdo_map, to_op, wait_loopback)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -146,18 +146,6 @@ def ecat_datagrams(reply):
             break
     return out
 
-
-def wait_loopback(master, do, di, value, cycles=300):
-    s = master.slaves[0]
-    got = None
-    for _ in range(cycles):
-        s.output = set_bits(s.output, do, value)
-        cycle(master)
-        got = get_bits(s.input, di)
-        if got == value:
-            return got
-        time.sleep(0.001)
-    return got
 
 
 def op_and_process_data(master):

@@ -9,7 +9,7 @@ import time
 
 from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, EXCEPTION_RESET, UART_MODULE,
                              check_capture, cycle, get_bits, go, open_master, pysoem, rackcat,
-                             read_pdo_map, run_cycles, set_bits, to_op)
+                             read_pdo_map, run_cycles, set_bits, to_op, wait_loopback)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -17,20 +17,6 @@ assert rackcat  # the fixture, imported for pytest
 def u32(slave, index, sub):
     return struct.unpack("<I", slave.sdo_read(index, sub))[0]
 
-
-def wait_loopback(master, do, di, value, cycles=200):
-    """Writes `value` to the DO card and cycles until the loopback-wired DI card shows it;
-    returns what the DI card showed last."""
-    s = master.slaves[0]
-    got = None
-    for _ in range(cycles):
-        s.output = set_bits(s.output, do, value)
-        cycle(master)
-        got = get_bits(s.input, di)
-        if got == value:
-            return got
-        time.sleep(0.001)
-    return got
 
 
 def test_outputs_loop_back_and_take_safe_state_leaving_op(rackcat):
