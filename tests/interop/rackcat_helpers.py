@@ -346,6 +346,19 @@ def set_bits(image, entry, v):
     return value.to_bytes(len(image), "little")
 
 
+def store_parameters(slave, timeout_s=5.0):
+    """0xFBF2 Store Parameters: write "save" to :01, then poll :02 until it leaves 255
+    (executing); 0/1 = done, 2 = error (ETG.5003.1 command object, docs/MDP.md)."""
+    slave.sdo_write(0xFBF2, 1, STORE_SAVE)
+    deadline = time.monotonic() + timeout_s
+    while True:
+        status = slave.sdo_read(0xFBF2, 2)[0]
+        if status != 255:
+            return status
+        assert time.monotonic() < deadline, "0xFBF2 still executing"
+        time.sleep(0.02)
+
+
 def wait_loopback(master, do, di, value, cycles=300):
     """Writes `value` to the DO card's entry `do` and cycles until the loopback-wired DI card's
     entry `di` shows it; returns what the DI card showed last."""

@@ -5,8 +5,8 @@ that survives a restart of `rackcat run` with the same --state-dir.
 import struct
 import time
 
-from rackcat_helpers import (DEFAULT_MODULES, STORE_SAVE, abort_code, go, open_master, pysoem,
-                             rackcat, run_cycles, to_op)
+from rackcat_helpers import (DEFAULT_MODULES, abort_code, go, open_master, pysoem,
+                             rackcat, run_cycles, store_parameters, to_op)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -72,18 +72,6 @@ def test_device_and_module_information(rackcat):
         master.close()
     rc.stop()
 
-
-def store_parameters(slave, timeout_s=5.0):
-    """0xFBF2 Store Parameters: write "save" to :01, then poll :02 until it leaves 255
-    (executing); 0/1 = done, 2 = error (ETG.5003.1 command object)."""
-    slave.sdo_write(0xFBF2, 1, STORE_SAVE)
-    deadline = time.monotonic() + timeout_s
-    while True:
-        status = slave.sdo_read(0xFBF2, 2)[0]
-        if status != 255:
-            return status
-        assert time.monotonic() < deadline, "0xFBF2 still executing"
-        time.sleep(0.02)
 
 
 def test_ipv4_stored_survives_restart_and_is_read_only_in_op(rackcat, tmp_path):

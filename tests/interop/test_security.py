@@ -15,7 +15,8 @@ from pathlib import Path
 import pytest
 
 from conftest import proc_status
-from rackcat_helpers import CONTROL_PORT, STORE_SAVE, go, open_master, pysoem, rackcat
+from rackcat_helpers import (CONTROL_PORT, go, open_master, pysoem, rackcat,
+                             store_parameters)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -122,17 +123,6 @@ def test_control_api_listens_on_loopback_only(rackcat):
 def _tree(root):
     return {p.relative_to(root): p.is_symlink() for p in Path(root).rglob("*")}
 
-
-def store_parameters(slave, timeout_s=5.0):
-    """0xFBF2 Store Parameters ("save" to :01, poll :02 until it leaves 255 = executing)."""
-    slave.sdo_write(0xFBF2, 1, STORE_SAVE)
-    deadline = time.monotonic() + timeout_s
-    while True:
-        status = slave.sdo_read(0xFBF2, 2)[0]
-        if status != 255:
-            return status
-        assert time.monotonic() < deadline, "0xFBF2 still executing"
-        time.sleep(0.02)
 
 
 def test_nothing_written_outside_the_state_directory(rackcat, tmp_path):
