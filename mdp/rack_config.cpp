@@ -171,11 +171,11 @@ class Parser {
       if (key == "channel") continue;
       if (key == "source") {
         ch.source = string(kv.second, "source", 32);
-        static constexpr std::array<std::string_view, 7> kSources{
-            "constant", "ramp", "sine", "noise", "replay", "loopback", "plant"};
+        static constexpr std::array<std::string_view, 8> kSources{
+            "constant", "ramp", "sine", "noise", "replay", "loopback", "plant", "clock"};
         if (std::find(kSources.begin(), kSources.end(), ch.source) == kSources.end()) {
           fail(kv.second, "unknown source '" + ch.source +
-                              "' (constant, ramp, sine, noise, replay, loopback, plant)");
+                              "' (constant, ramp, sine, noise, replay, loopback, plant, clock)");
         }
       } else if (key == "from" && kv.second.IsMap()) {
         ch.loopback = loopback_ref(kv.second, true);

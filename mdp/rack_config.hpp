@@ -62,8 +62,8 @@ struct ControlModule {
 };
 
 // Where an input channel's value comes from (driven by modules/). `kind` is the source name
-// from the file: "constant", "ramp", "sine", "noise", "replay", "loopback", "plant"; `params`
-// keeps every other scalar key of the channel entry verbatim for the source's own parser.
+// from the file: "constant", "ramp", "sine", "noise", "replay", "loopback", "plant", "clock";
+// `params` keeps every other scalar key of the channel entry verbatim for the source's own parser.
 struct LoopbackRef {
   uint8_t rim = 0;
   uint8_t slot = 0;

@@ -4,6 +4,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -44,6 +45,27 @@ double SineSource::sample(double t) {
 std::string SineSource::describe() const {
   return fmt::format("sine amplitude={} frequency={} offset={} phase={}", amplitude_, frequency_,
                      offset_, phase_);
+}
+
+ClockSource::ClockSource(double tick_us) : tick_ns_(static_cast<int64_t>(tick_us * 1000.0)) {
+  if (!(tick_us >= 1.0) || tick_us > 1e6) {
+    throw std::invalid_argument("clock: tick_us must be 1..1000000");
+  }
+}
+
+int16_t ClockSource::code_at(int64_t monotonic_ns) const {
+  return static_cast<int16_t>((monotonic_ns / tick_ns_) % 65535 - 32767);
+}
+
+double ClockSource::sample(double) {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);  // vDSO: no system call, no allocation
+  const int64_t ns = static_cast<int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  return code_at(ns) * 10.0 / 32767.0;  // AnalogScale turns it back into the same code
+}
+
+std::string ClockSource::describe() const {
+  return fmt::format("clock tick_us={}", static_cast<double>(tick_ns_) / 1000.0);
 }
 
 namespace {

@@ -1,7 +1,7 @@
 // Signal models for input channels. Every input channel of the emulated rack has one source
 // that is sampled on the process-data cycle (free run, SM event or SYNC0): constant, ramp,
 // sine, Gaussian noise from a seeded PRNG, replay of a CSV recording, loopback from an output
-// channel, or one output of a linear state-space plant.
+// channel, one output of a linear state-space plant, or a monotonic-clock time stamp.
 //
 // Units are physical: volts for analog channels, °C for thermocouple and RTD channels,
 // 0/1 for digital channels (>= 0.5 reads as 1).
@@ -62,6 +62,24 @@ class SineSource final : public Source {
 
  private:
   double amplitude_, frequency_, offset_, phase_;
+};
+
+// Time stamps for measuring how old input data is when it reaches a master: the value is the
+// ±10 V code (docs/MODULES.md) of the CLOCK_MONOTONIC time in ticks of `tick_us`, modulo 65535,
+// as code = ticks mod 65535 - 32767 (so -32767..32767, every code exact). A master on the same
+// machine (same monotonic clock) decodes it and subtracts it from its own receive time: the
+// age of the sample across RIM, CAN bus, control module and EtherCAT. It ignores the rack time
+// on purpose; it is the one source that is not reproducible from run to run.
+class ClockSource final : public Source {
+ public:
+  explicit ClockSource(double tick_us);
+  double sample(double) override;
+  std::string describe() const override;
+  // The code this source gives at CLOCK_MONOTONIC time `monotonic_ns` (tests, decoders).
+  int16_t code_at(int64_t monotonic_ns) const;
+
+ private:
+  int64_t tick_ns_;
 };
 
 // xoshiro256** (Blackman & Vigna), seeded through splitmix64: the same seed gives the same

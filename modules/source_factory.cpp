@@ -207,6 +207,8 @@ std::unique_ptr<Source> make_source(std::string_view kind, const SourceParams& p
     } catch (const std::runtime_error& e) {
       throw std::invalid_argument(std::string("replay: ") + e.what());  // a bad request
     }
+  } else if (kind == "clock") {
+    s = std::make_unique<ClockSource>(p.number("tick_us", 10.0));
   } else if (kind == "loopback") {
     uint8_t rim = 0, slot = 0;
     if (p.has("module")) {
@@ -235,7 +237,7 @@ std::unique_ptr<Source> make_source(std::string_view kind, const SourceParams& p
     s = std::make_unique<PlantSource>(plant, static_cast<size_t>(out), name);
   } else {
     throw std::invalid_argument(fmt::format(
-        "unknown source '{}' (constant, ramp, sine, noise, replay, loopback, plant)", kind));
+        "unknown source '{}' (constant, ramp, sine, noise, replay, loopback, plant, clock)", kind));
   }
   p.check_unused();
   return s;

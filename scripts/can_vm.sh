@@ -5,23 +5,34 @@
 # libraries ldd names); inside, creates vcan0 and runs can_vm_test, which prints one line
 # "CAN_VM_RESULT PASS|FAIL ...". Where this kernel has AF_CAN and vcan0 is up, runs natively.
 #
+# Then the EtherCAT side (tests/can_vm/ecat_over_can.py): the VM mounts this machine's root
+# file system read-only over virtio-9p, chroots into it and runs pysoem against
+# `rackcat run --rim-bus can:vcan1` over a veth pair, with the RIMs as processes on a vcan bus
+# held to 1 Mbit/s by netem. It prints "CAN_VM_ECAT_RESULT PASS|FAIL|SKIP ..." (SKIP only when
+# pysoem is not installed). Both lines must pass.
+#
 # Usage: scripts/can_vm.sh CAN_VM_TEST RACKCAT
 # Exit: 0 pass, 1 fail, 77 skipped (no qemu / kernel / CAN modules / busybox-static).
 set -u
 SKIP=77
 test_bin=${1:?usage: can_vm.sh CAN_VM_TEST RACKCAT}
 rackcat=${2:?usage: can_vm.sh CAN_VM_TEST RACKCAT}
+test_bin=$(realpath "$test_bin")
+rackcat=$(realpath "$rackcat")
+ecat_test=$(realpath "$(dirname "$0")/../tests/can_vm/ecat_over_can.py")
 
-verdict() {  # reads the result line from a log file
-  local line
+verdict() {  # reads the two result lines from a log file
+  local line ecat
   line=$(grep -a -m1 '^CAN_VM_RESULT' "$1" | tr -d '\r')
-  if [[ -z $line ]]; then
-    echo "can_vm: no result line; last console lines:"
-    tail -n 30 "$1"
+  ecat=$(grep -a -m1 '^CAN_VM_ECAT_RESULT' "$1" | tr -d '\r')
+  if [[ -z $line || -z $ecat ]]; then
+    echo "can_vm: a result line is missing; last console lines:"
+    tail -n 40 "$1"
     exit 1
   fi
   echo "$line"
-  [[ $line == "CAN_VM_RESULT PASS"* ]] && exit 0
+  echo "$ecat"
+  [[ $line == "CAN_VM_RESULT PASS"* && $ecat =~ ^CAN_VM_ECAT_RESULT\ (PASS|SKIP) ]] && exit 0
   exit 1
 }
 
@@ -31,6 +42,7 @@ if python3 -c 'import socket; socket.socket(socket.AF_CAN, socket.SOCK_RAW, sock
   log=$(mktemp)
   trap 'rm -f "$log"' EXIT
   timeout 50 "$test_bin" "$rackcat" vcan0 >"$log" 2>&1
+  timeout 90 python3 "$ecat_test" "$rackcat" >>"$log" 2>&1
   verdict "$log"
 fi
 
@@ -44,20 +56,36 @@ if ldd "$busybox" >/dev/null 2>&1; then
   echo "can_vm: SKIP ($busybox is not statically linked: install busybox-static)"
   exit $SKIP
 fi
-mods=(net/can/can net/can/can-raw drivers/net/can/dev/can-dev drivers/net/can/vcan)
-for m in "${mods[@]}"; do
-  if ! ls "$moddir/$m".ko* >/dev/null 2>&1; then
-    echo "can_vm: SKIP (kernel $kver has no $m module)"
-    exit $SKIP
-  fi
+# Kernel modules with their dependencies, in load order (modules.dep lists a module's
+# dependencies, the ones to load first last).
+depfile=/lib/modules/$kver/modules.dep
+[[ -r $depfile ]] || { echo "can_vm: SKIP (no $depfile)"; exit $SKIP; }
+declare -A seen=()
+order=()
+add_module() {  # add_module NAME-or-PATH
+  local path=$1 line dep
+  [[ $path == */* ]] || path=$(grep -m1 -E "/$1\.ko(\.[a-z]+)?:" "$depfile" | cut -d: -f1)
+  [[ -n $path ]] || return 1
+  [[ -n ${seen[$path]:-} ]] && return 0
+  seen[$path]=1
+  line=$(grep -m1 "^$path:" "$depfile" | cut -d: -f2)
+  local deps=($line) i
+  for ((i = ${#deps[@]} - 1; i >= 0; i--)); do add_module "${deps[i]}" || return 1; done
+  order+=("$path")
+}
+for m in can can-raw can-dev vcan; do
+  add_module "$m" || { echo "can_vm: SKIP (kernel $kver has no $m module)"; exit $SKIP; }
 done
+# The EtherCAT stage: veth, netem, and 9p over virtio for the host's root file system.
+ecat_mods=1
+for m in veth sch_netem virtio_pci 9pnet_virtio 9p; do add_module "$m" || ecat_mods=0; done
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 root=$work/root
 mkdir -p "$root"/{bin,proc,sys,dev,tmp,modules}
 cp "$busybox" "$root/bin/busybox"
-for a in sh mount insmod ip reboot sleep cat echo; do ln -s busybox "$root/bin/$a"; done
+for a in sh mount insmod ip reboot sleep cat echo mkdir chroot; do ln -s busybox "$root/bin/$a"; done
 # The test binaries and every shared library they load (with the dynamic loader).
 for b in "$test_bin" "$rackcat"; do
   cp "$b" "$root/bin/"
@@ -65,25 +93,50 @@ for b in "$test_bin" "$rackcat"; do
     cp -L --parents "$lib" "$root/" 2>/dev/null
   done
 done
-for m in "${mods[@]}"; do
-  f=$(ls "$moddir/$m".ko* | head -n 1)
-  name=$(basename "$m").ko
+for path in "${order[@]}"; do
+  f=/lib/modules/$kver/$path
+  name=$(basename "$path")
+  name=${name%%.ko*}
   case $f in
-    *.xz) xz -dc "$f" >"$root/modules/$name" ;;
-    *.zst) zstd -dcq "$f" >"$root/modules/$name" ;;
-    *.gz) gzip -dc "$f" >"$root/modules/$name" ;;
-    *) cp "$f" "$root/modules/$name" ;;
+    *.xz) xz -dc "$f" >"$root/modules/$name.ko" ;;
+    *.zst) zstd -dcq "$f" >"$root/modules/$name.ko" ;;
+    *.gz) gzip -dc "$f" >"$root/modules/$name.ko" ;;
+    *) cp "$f" "$root/modules/$name.ko" ;;
   esac
+  echo "$name" >>"$root/modules/order"
 done
+# The EtherCAT stage runs in the host's root (chroot over 9p) with the host's python3.
+py=$(python3 -c 'import sys; print(sys.executable)' 2>/dev/null)
+if [[ $ecat_mods == 1 && -n $py ]]; then
+  printf 'env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root PYTHONDONTWRITEBYTECODE=1 %s %q %q %q\n' \
+    "RACKCAT_CAN_BITRATE=${RACKCAT_CAN_BITRATE:-1mbit}" "$py" "$ecat_test" "$rackcat" \
+    >"$root/stage_ecat"
+fi
 cat >"$root/init" <<'INIT'
 #!/bin/sh
 mount -t proc proc /proc
 mount -t sysfs sys /sys
 mount -t devtmpfs dev /dev
-for m in can can-raw can-dev vcan; do insmod /modules/$m.ko || echo "insmod $m failed"; done
+for m in $(cat /modules/order); do
+  # echo=1: vcan delivers frames itself, after the qdisc (netem rate in the EtherCAT stage)
+  if [ "$m" = vcan ]; then p=echo=1; else p=; fi
+  insmod /modules/$m.ko $p || echo "insmod $m failed"
+done
 ip link set lo up
 ip link add dev vcan0 type vcan && ip link set vcan0 up
 /bin/can_vm_test /bin/rackcat vcan0
+if [ ! -e /stage_ecat ]; then
+  echo "CAN_VM_ECAT_RESULT FAIL reason=no_veth_netem_9p_modules_or_no_python3"
+elif mkdir -p /host && mount -t 9p -o trans=virtio,version=9p2000.L,ro,msize=512000 hostroot /host; then
+  mount -t proc proc /host/proc
+  mount -t sysfs sys /host/sys
+  mount -t devtmpfs dev /host/dev
+  mount -t tmpfs tmp /host/tmp
+  mount -t tmpfs run /host/run
+  chroot /host /bin/sh -c "$(cat /stage_ecat)"
+else
+  echo "CAN_VM_ECAT_RESULT FAIL reason=9p_mount_failed"
+fi
 reboot -f
 INIT
 chmod +x "$root/init"
@@ -95,8 +148,9 @@ accel=(-accel tcg)
 if [[ ${CAN_VM_KVM:-0} == 1 && -w /dev/kvm ]]; then accel=(-enable-kvm); fi
 log=$work/console.log
 start=$(date +%s.%N)
-timeout 55 "$qemu" "${accel[@]}" -m 512 -smp 2 -nographic -no-reboot -nodefaults -serial stdio \
+timeout 150 "$qemu" "${accel[@]}" -m 1024 -smp 2 -nographic -no-reboot -nodefaults -serial stdio \
   -kernel "$kernel" -initrd "$work/initrd.gz" \
+  -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap \
   -append "console=ttyS0 quiet loglevel=3 panic=-1 rdinit=/init" >"$log" 2>&1
 end=$(date +%s.%N)
 echo "can_vm: VM ($kver, ${accel[*]}) ran $(awk "BEGIN{printf \"%.1f\", $end-$start}") s"

@@ -1,6 +1,10 @@
 // Source descriptions as the rack file and the control API give them.
 #include <gtest/gtest.h>
 
+#include <ctime>
+
+#include "modules/analog_scale.hpp"
+#include "modules/signal_source.hpp"
 #include "modules/source_factory.hpp"
 #include "modules/state_space_plant.hpp"
 
@@ -88,4 +92,36 @@ TEST(SourceFactory, PlantBoundToAnOutput) {
                          ctx);
   for (int k = 0; k < 3000; ++k) plant->step();  // 30 s = 15 time constants
   EXPECT_NEAR(src->sample(0), 80.0, 1e-3);       // steady state 8 * 10 V
+}
+
+// The clock source is the time stamp the CAN input-age measurement decodes (docs/CAN.md): the
+// ±10 V code must count ticks of CLOCK_MONOTONIC exactly through the analog scaling.
+TEST(SourceFactory, ClockSourceCodesMonotonicTicksThroughTheAnalogScale) {
+  double out = 0;
+  SourceContext ctx = context(&out);
+  const ClockSource clock(10.0);
+  EXPECT_EQ(clock.code_at(0), -32767);
+  EXPECT_EQ(clock.code_at(9'999), -32767);
+  EXPECT_EQ(clock.code_at(10'000), -32766);
+  EXPECT_EQ(clock.code_at(int64_t{65534} * 10'000), 32767);
+  EXPECT_EQ(clock.code_at(int64_t{65535} * 10'000), -32767);  // wraps over 65535 codes
+
+  auto src = make_source("clock", {{"tick_us", "10"}}, ctx);
+  const AnalogScale scale;
+  auto now_ns = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+  };
+  const int64_t before = now_ns();
+  const auto code = static_cast<int16_t>(scale.to_code(src->sample(0)));
+  const int64_t after = now_ns();
+  const int lo = clock.code_at(before), hi = clock.code_at(after);
+  if (lo <= hi) {
+    EXPECT_GE(code, lo);
+    EXPECT_LE(code, hi);
+  } else {  // wrapped between the two reads
+    EXPECT_TRUE(code >= lo || code <= hi);
+  }
+  EXPECT_THROW(make_source("clock", {{"tick_us", "0"}}, ctx), std::invalid_argument);
 }
