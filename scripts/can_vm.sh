@@ -12,6 +12,7 @@
 # pysoem is not installed). Both lines must pass.
 #
 # Usage: scripts/can_vm.sh CAN_VM_TEST RACKCAT
+# CAN_VM_LOG=FILE keeps the VM's console output.
 # Exit: 0 pass, 1 fail, 77 skipped (no qemu / kernel / CAN modules / busybox-static).
 set -u
 SKIP=77
@@ -20,9 +21,10 @@ rackcat=${2:?usage: can_vm.sh CAN_VM_TEST RACKCAT}
 test_bin=$(realpath "$test_bin")
 rackcat=$(realpath "$rackcat")
 ecat_test=$(realpath "$(dirname "$0")/../tests/can_vm/ecat_over_can.py")
+check_capture=$(realpath "$(dirname "$0")/../tests/can_vm/check_can_capture.py")
 
-verdict() {  # reads the two result lines from a log file
-  local line ecat
+verdict() {  # verdict LOG CAPTURE: the two result lines of the log, then the CAN capture
+  local line ecat cap=
   line=$(grep -a -m1 '^CAN_VM_RESULT' "$1" | tr -d '\r')
   ecat=$(grep -a -m1 '^CAN_VM_ECAT_RESULT' "$1" | tr -d '\r')
   if [[ -z $line || -z $ecat ]]; then
@@ -32,18 +34,25 @@ verdict() {  # reads the two result lines from a log file
   fi
   echo "$line"
   echo "$ecat"
-  [[ $line == "CAN_VM_RESULT PASS"* && $ecat =~ ^CAN_VM_ECAT_RESULT\ (PASS|SKIP) ]] && exit 0
-  exit 1
+  if [[ $ecat == "CAN_VM_ECAT_RESULT PASS"* ]]; then
+    cap=$(python3 "$check_capture" "$2")
+    echo "$cap"
+  fi
+  [[ $line == "CAN_VM_RESULT PASS"* && $ecat =~ ^CAN_VM_ECAT_RESULT\ (PASS|SKIP) ]] || exit 1
+  [[ -z $cap || $cap =~ ^CAN_VM_CAPTURE\ (PASS|SKIP) ]] || exit 1
+  exit 0
 }
 
 # Natively, when the host kernel can (AF_CAN and a vcan0 that is up).
 if python3 -c 'import socket; socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)' \
   2>/dev/null && ip link show vcan0 2>/dev/null | grep -q 'UP'; then
-  log=$(mktemp)
-  trap 'rm -f "$log"' EXIT
-  timeout 50 "$test_bin" "$rackcat" vcan0 >"$log" 2>&1
-  timeout 90 python3 "$ecat_test" "$rackcat" >>"$log" 2>&1
-  verdict "$log"
+  tmp=$(mktemp -d)
+  trap 'rm -rf "$tmp"' EXIT
+  timeout 50 "$test_bin" "$rackcat" vcan0 >"$tmp/log" 2>&1
+  # Its own network namespace: vcan1 and the veth pair vanish with it.
+  RACKCAT_CAN_CAPTURE=$tmp/can.pcapng timeout 90 unshare --net python3 "$ecat_test" "$rackcat" \
+    >>"$tmp/log" 2>&1
+  verdict "$tmp/log" "$tmp/can.pcapng"
 fi
 
 qemu=$(command -v qemu-system-x86_64) || { echo "can_vm: SKIP (no qemu-system-x86_64)"; exit $SKIP; }
@@ -108,9 +117,9 @@ done
 # The EtherCAT stage runs in the host's root (chroot over 9p) with the host's python3.
 py=$(python3 -c 'import sys; print(sys.executable)' 2>/dev/null)
 if [[ $ecat_mods == 1 && -n $py ]]; then
-  printf 'env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root PYTHONDONTWRITEBYTECODE=1 %s %q %q %q\n' \
-    "RACKCAT_CAN_BITRATE=${RACKCAT_CAN_BITRATE:-1mbit}" "$py" "$ecat_test" "$rackcat" \
-    >"$root/stage_ecat"
+  printf 'env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root PYTHONDONTWRITEBYTECODE=1 %s %s %q %q %q\n' \
+    "RACKCAT_CAN_BITRATE=${RACKCAT_CAN_BITRATE:-1mbit}" RACKCAT_CAN_CAPTURE=/tmp/out/can.pcapng \
+    "$py" "$ecat_test" "$rackcat" >"$root/stage_ecat"
 fi
 cat >"$root/init" <<'INIT'
 #!/bin/sh
@@ -132,6 +141,8 @@ elif mkdir -p /host && mount -t 9p -o trans=virtio,version=9p2000.L,ro,msize=512
   mount -t sysfs sys /host/sys
   mount -t devtmpfs dev /host/dev
   mount -t tmpfs tmp /host/tmp
+  mkdir -p /host/tmp/out  # the writable share: the CAN capture comes back to the host here
+  mount -t 9p -o trans=virtio,version=9p2000.L,msize=512000 out /host/tmp/out
   mount -t tmpfs run /host/run
   chroot /host /bin/sh -c "$(cat /stage_ecat)"
 else
@@ -147,11 +158,17 @@ accel=(-accel tcg)
 # sandboxed hypervisors); TCG boots this kernel in seconds.
 if [[ ${CAN_VM_KVM:-0} == 1 && -w /dev/kvm ]]; then accel=(-enable-kvm); fi
 log=$work/console.log
+mkdir -p "$work/out"
 start=$(date +%s.%N)
 timeout 150 "$qemu" "${accel[@]}" -m 1024 -smp 2 -nographic -no-reboot -nodefaults -serial stdio \
   -kernel "$kernel" -initrd "$work/initrd.gz" \
   -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap \
+  -virtfs local,path="$work/out",mount_tag=out,security_model=none \
   -append "console=ttyS0 quiet loglevel=3 panic=-1 rdinit=/init" >"$log" 2>&1
 end=$(date +%s.%N)
+if [[ -n ${CAN_VM_LOG:-} ]]; then  # the whole console and the CAN capture, for debugging
+  cp "$log" "$CAN_VM_LOG"
+  cp "$work/out/can.pcapng" "$CAN_VM_LOG.pcapng" 2>/dev/null
+fi
 echo "can_vm: VM ($kver, ${accel[*]}) ran $(awk "BEGIN{printf \"%.1f\", $end-$start}") s"
-verdict "$log"
+verdict "$log" "$work/out/can.pcapng"

@@ -29,6 +29,7 @@ Usage: ecat_over_can.py RACKCAT_BINARY
 """
 import os
 import re
+import shutil
 import signal
 import statistics
 import subprocess
@@ -91,6 +92,47 @@ def spawn_rim(rackcat, rim):
                  "--heartbeat-ms", RIM_HEARTBEAT_MS, rt=40)
 
 
+def start_capture():
+    """dumpcap on the CAN interface into $RACKCAT_CAN_CAPTURE (checked by
+    check_can_capture.py after the run: every frame must decode as CANopen)."""
+    path = os.environ.get("RACKCAT_CAN_CAPTURE")
+    if not path or shutil.which("dumpcap") is None:
+        return None
+    p = subprocess.Popen(["dumpcap", "-q", "-i", CAN, "-w", path], stdout=subprocess.DEVNULL,
+                         stderr=subprocess.DEVNULL)
+    children.append(p)
+    deadline = time.monotonic() + 10
+    while not (Path(path).exists() and Path(path).stat().st_size > 0):
+        if time.monotonic() > deadline or p.poll() is not None:
+            break
+        time.sleep(0.05)
+    time.sleep(0.2)  # the capture file exists once dumpcap has opened the interface
+    return p
+
+
+def stop_capture(p, cycle):
+    """Stops dumpcap while the master keeps cycling: in OP, a pause longer than the process
+    data watchdog (100 ms) would, rightly, put the outputs into their safe state."""
+    if p is None:
+        return
+    p.send_signal(signal.SIGINT)
+    deadline = time.monotonic() + 10
+    while p.poll() is None and time.monotonic() < deadline:
+        cycle()
+        time.sleep(0.001)
+    if p.poll() is None:
+        p.kill()
+        p.wait()
+
+
+def vcan_echoes():
+    """netem delays a frame only if the vcan driver, not the CAN core, loops it back."""
+    try:
+        return Path("/sys/module/vcan/parameters/echo").read_text().strip() in ("Y", "1")
+    except OSError:
+        return False
+
+
 def can_counters():
     """Frames the kernel passed through vcan1's qdisc, and the ones it dropped."""
     out = subprocess.run(["tc", "-s", "qdisc", "show", "dev", CAN], stdout=subprocess.PIPE,
@@ -119,7 +161,10 @@ def main():
     pysoem.settings.timeouts.ret = 20_000
 
     try:
+        sh("ip", "link", "set", "lo", "up")  # the control API listens on 127.0.0.1
         sh("ip", "link", "add", "dev", CAN, "type", "vcan")
+        if BITRATE != "none" and not vcan_echoes():
+            result("FAIL", stage="setup", reason="vcan_loaded_without_echo=1_netem_would_not_apply")
         if BITRATE != "none":
             sh("tc", "qdisc", "add", "dev", CAN, "root", "netem", "rate", BITRATE, "limit", "1000")
         sh("ip", "link", "set", CAN, "up")
@@ -197,6 +242,7 @@ def main():
     acknowledge_safeop()
 
     # 2. The RIMs join the bus: OP once both are ONLINE.
+    capture = start_capture()  # boot-up, SDO checks, NMT start, heartbeats, PDOs
     t_rims = time.monotonic()
     rims = {1: spawn_rim(rackcat, 1), 2: spawn_rim(rackcat, 2)}
     reached = False
@@ -209,6 +255,13 @@ def main():
         result("FAIL", stage="op_with_rims", al_status=hex(s.al_status),
                rim1_exit=rims[1].poll(), rim2_exit=rims[2].poll())
     op_ms = ms_since(t_rims)
+    for _ in range(100):
+        cycle()
+        time.sleep(0.001)
+    stop_capture(capture, cycle)
+    master.read_state()
+    if s.state != pysoem.OP_STATE:
+        result("FAIL", stage="op_after_capture", state=hex(s.state), al_status=hex(s.al_status))
 
     # 3. OP at 1 ms: inputs from the RIMs, input age, relay loopback over CAN.
     ages_ms, rtts_ms, bad_wkc, const_codes = [], [], 0, set()
@@ -256,7 +309,8 @@ def main():
     if const_codes != {8192}:
         result("FAIL", stage="rim_inputs", const_codes=sorted(const_codes)[:4])
     if loop_ok < AGE_CYCLES // 200 - 1:
-        result("FAIL", stage="loopback_over_can", loopbacks=loop_ok)
+        result("FAIL", stage="loopback_over_can", loopbacks=loop_ok, do=hex(pattern),
+               di=hex(get_bits(s.input, di)), rim2_exit=rims[2].poll())
 
     # 4. Unplug RIM 2: OFFLINE in 0x2021:08 as the master reads it, and the ESM leaves OP.
     t_kill = time.monotonic()
