@@ -155,8 +155,13 @@ def main():
     t_end = time.monotonic() + total
     t_phase2 = time.monotonic() + total / 2
     faults = 0
+    rss_series = [rss_start]  # every 30 s: tells warm-up growth from a slow creep
+    next_rss = time.monotonic() + 30.0
     try:
         while time.monotonic() < t_end:
+            if time.monotonic() >= next_rss:
+                rss_series.append(rss_kib(args.pid))
+                next_rss += 30.0
             if phase[0] == 1 and time.monotonic() >= t_phase2:
                 phase[0] = 2
             if phase[0] == 2:
@@ -193,6 +198,10 @@ def main():
     for line in sdo_errors[:10]:
         print(f"    {line}")
     print(f"  rackcat resident memory: {rss_start} KiB at start, {rss_end} KiB at end")
+    rss_series.append(rss_end)
+    print("  resident memory every 30 s (KiB): " + " ".join(map(str, rss_series)))
+    half = rss_series[len(rss_series) // 2:]
+    print(f"  growth over the second half of the run: {half[-1] - half[0]} KiB")
     ok = (wkc_errors[1] == 0 and wkc_errors[2] == 0 and sdo["failed"] == 0
           and rss_end <= rss_start + 512)
     print("soak: " + ("ok" if ok else "FAILED"))
