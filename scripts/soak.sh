@@ -5,7 +5,8 @@
 #
 #   scripts/soak.sh [--minutes N] [--slaves N]      (root; skips with a message otherwise)
 #
-# RACKCAT_BUILD_DIR selects the build directory holding rackcat (default build/).
+# RACKCAT_BUILD_DIR selects the build directory holding rackcat (default build/);
+# RACKCAT_SOAK_PCAP=FILE makes rackcat record every frame (for diagnosing a failure).
 #
 # Fails when a cycle without injected faults has a wrong working counter, or when resident
 # memory grows. Long runs are recorded in docs/RELIABILITY.md.
@@ -37,8 +38,10 @@ netns_up "$NS" ecat-slave ecat-master
 # machine plain scheduling delays exceed SOEM's 2 ms receive timeout now and then.
 RT=()
 if command -v chrt >/dev/null && chrt -f 40 true 2>/dev/null; then RT=(chrt -f 40); fi
+PCAP=()
+[ -n "${RACKCAT_SOAK_PCAP:-}" ] && PCAP=(--pcap "$RACKCAT_SOAK_PCAP")
 ip netns exec "$NS" "${RT[@]}" "$BUILD/rackcat" run --iface ecat-slave --slaves "$SLAVES" --state-dir "$STATE" \
-  --no-pty >"$STATE/rackcat.log" 2>&1 &
+  --no-pty "${PCAP[@]}" >"$STATE/rackcat.log" 2>&1 &
 SLAVE=$!
 sleep 0.5
 rc=0
