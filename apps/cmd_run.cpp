@@ -66,6 +66,7 @@ int run(const RunArgs& a) {
   if (const int rc = runner.open("rackcat"); rc != 0) return rc;
 
   std::vector<ecat::Application*> line;
+  line.reserve(racks.size());
   for (auto& r : racks) line.push_back(r.get());
   ecat::Segment segment(line);
 

@@ -33,15 +33,18 @@ void exit_with(int code) {
 }  // namespace rackcat::apps
 
 int main(int argc, char** argv) {
-  CLI::App app{"rackcat: an emulated EtherCAT modular I/O rack (Fusion.IO-style MDP device)"};
-  app.require_subcommand(1);
-  rackcat::apps::register_all(app);
+  // Everything inside the try: building the command line can throw too (std::bad_alloc).
   try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    // CLI11 uses exit code 0 for --help; usage errors are 2 as documented.
-    int rc = app.exit(e);
-    return rc == 0 ? 0 : 2;
+    CLI::App app{"rackcat: an emulated EtherCAT modular I/O rack (Fusion.IO-style MDP device)"};
+    app.require_subcommand(1);
+    rackcat::apps::register_all(app);
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+      // CLI11 uses exit code 0 for --help; usage errors are 2 as documented.
+      const int rc = app.exit(e);
+      return rc == 0 ? 0 : 2;
+    }
   } catch (const rackcat::apps::ExitRequest& r) {
     return r.code;
   } catch (const std::exception& e) {

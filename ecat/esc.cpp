@@ -239,12 +239,10 @@ bool Esc::physical_write(uint16_t address, const uint8_t* src, uint16_t len) {
 void Esc::end_frame() {
   if (al_control_pending_) esm_control_written();
   if (sm_changed_ != 0) esm_sm_changed();
-  if (mailbox_work_ || repeat_pending_) {
-    mailbox_service();
-  } else if (state_ != AlState::Init && sm_[1].active &&
-             (mem_[reg::kSm + reg::kSmSize + reg::kSmStatusOffset] & 0x08) == 0) {
-    mailbox_service();  // SM1 free: the device may have an unsolicited message (Emergency)
-  }
+  // With SM1 free the device may also have an unsolicited message (Emergency) to send.
+  const bool sm1_free = state_ != AlState::Init && sm_[1].active &&
+                        (mem_[reg::kSm + reg::kSmSize + reg::kSmStatusOffset] & 0x08) == 0;
+  if (mailbox_work_ || repeat_pending_ || sm1_free) mailbox_service();
 }
 
 void Esc::count_frame_error() {

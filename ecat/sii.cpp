@@ -54,10 +54,9 @@ void Esc::sii_load_image() {
 void Esc::sii_reload_config_area() {
   uint16_t status = options_.sii_read_bytes == 8 ? kReadSize8 : 0;
   if (sii_.size() > 2048) status |= kTwoAddressBytes;
-  if (sii_.size() < 16) {
-    status |= kNotLoaded | kChecksumError;
-  } else if (crc8(sii_.data(), 14) != sii_[14]) {
-    // The ESC refuses a configuration area with a bad checksum and leaves the PDI off.
+  if (sii_.size() < 16 || crc8(sii_.data(), 14) != sii_[14]) {
+    // The ESC refuses a missing configuration area or one with a bad checksum and leaves the
+    // PDI off.
     status |= kNotLoaded | kChecksumError;
   } else {
     std::memcpy(&mem_[reg::kPdiControl], &sii_[0], 2);     // word 0: PDI control, ESC config

@@ -366,7 +366,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   build_object_dictionary(d.config, d.od);
   d.params = std::make_unique<ParameterSet>(d.od, d.config);
   d.default_payload = d.params->capture();
-  d.state_dir = options.state_dir.empty() ? default_state_dir() : options.state_dir;
+  d.state_dir = options.state_dir.empty() ? default_state_dir() : std::move(options.state_dir);
   d.store = std::make_unique<ParameterStore>(d.state_dir + "/parameters.bin");
   d.writer = std::make_unique<ParameterWriter>(*d.store);
   d.image = std::make_unique<coe::ProcessImage>(d.od);

@@ -2,6 +2,7 @@
 // "FILE:LINE: problem" with the line of the offending node (yaml-cpp marks are 0-based).
 #include "mdp/rack_config.hpp"
 
+#include <fmt/format.h>
 #include <openssl/evp.h>
 #include <yaml-cpp/yaml.h>
 
@@ -54,7 +55,7 @@ class Parser {
     for (const auto& kv : node) {
       const std::string key = kv.first.as<std::string>();
       if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-        fail(kv.first, "unknown key '" + key + "' in " + what);
+        fail(kv.first, fmt::format("unknown key '{}' in {}", key, what));
       }
     }
   }

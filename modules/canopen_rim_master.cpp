@@ -245,10 +245,10 @@ void RimMaster::evaluate(Link& l) {
   const BusStatus& bus = bus_.status();
   RimState s;
   bool comm_error = false;
-  if (bus.bus_off || bus.error_passive) {
-    s = RimState::Error;
-    comm_error = true;
-  } else if (l.sdo_failures >= options_.max_sdo_failures || (hb->alive && l.comm_emcy)) {
+  // A communication error on the bus, or one the node reports (repeated SDO failures, a
+  // communication Emergency while alive).
+  if (bus.bus_off || bus.error_passive || l.sdo_failures >= options_.max_sdo_failures ||
+      (hb->alive && l.comm_emcy)) {
     s = RimState::Error;
     comm_error = true;
   } else if (!hb->alive) {

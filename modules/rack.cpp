@@ -43,6 +43,9 @@ bool parse_u8(std::string_view s, uint8_t& out) {
 Rack::Rack(mdp::Device& device, RackOptions options)
     : device_(device),
       options_(std::move(options)),
+      // ExceptionTree is the MDP exception tree (the guide's diagnosis objects), not a C++
+      // exception: bugprone-throw-keyword-missing goes by the type's name alone.
+      // NOLINTNEXTLINE(bugprone-throw-keyword-missing)
       tree_(device.dictionary(), device.modules().size(),
             EmergencySink{[this](uint16_t code, uint8_t reg, const uint8_t (&data)[5]) {
               device_.raise_emergency(code, reg, {data[0], data[1], data[2], data[3], data[4]});

@@ -130,8 +130,9 @@ Eigen::MatrixXd to_eigen(const MatrixText& t) {
 }
 }  // namespace
 
-std::unique_ptr<StateSpacePlant> make_plant(const SourceParams& params, double dt,
-                                            std::function<OutputRef(const std::string&)> input) {
+std::unique_ptr<StateSpacePlant> make_plant(
+    const SourceParams& params, double dt,
+    const std::function<OutputRef(const std::string&)>& input) {
   auto get = [&](const char* k) -> std::string {
     auto it = params.find(k);
     if (it == params.end())
@@ -147,7 +148,7 @@ std::unique_ptr<StateSpacePlant> make_plant(const SourceParams& params, double d
   constexpr Eigen::Index kMaxDim = 32;
   if (a.rows() > kMaxDim || b.cols() > kMaxDim || c.rows() > kMaxDim)
     throw std::invalid_argument("plant: at most 32 states, inputs and outputs");
-  auto plant = std::make_unique<StateSpacePlant>(a, b, c, d, dt);
+  auto plant = std::make_unique<StateSpacePlant>(a, b, std::move(c), std::move(d), dt);
   if (params.count("x0")) {
     const MatrixText x0 = parse_matrix(params.at("x0"), "plant x0");
     if (x0.values.size() != plant->states())

@@ -52,8 +52,9 @@ std::unique_ptr<Source> make_source(std::string_view kind, const SourceParams& p
                                     SourceContext& ctx);
 
 // Plant construction from parameters (used by SourceContext::plant implementations).
-std::unique_ptr<StateSpacePlant> make_plant(const SourceParams& params, double dt,
-                                            std::function<OutputRef(const std::string&)> input);
+std::unique_ptr<StateSpacePlant> make_plant(
+    const SourceParams& params, double dt,
+    const std::function<OutputRef(const std::string&)>& input);
 
 // "1 0; 0 -2" -> matrix; throws std::invalid_argument.
 struct MatrixText {

@@ -5,8 +5,8 @@
 
 namespace rackcat::modules {
 
-StateSpacePlant::StateSpacePlant(Eigen::MatrixXd a, Eigen::MatrixXd b, Eigen::MatrixXd c,
-                                 Eigen::MatrixXd d, double dt)
+StateSpacePlant::StateSpacePlant(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b,
+                                 Eigen::MatrixXd c, Eigen::MatrixXd d, double dt)
     : dt_(dt) {
   const Eigen::Index n = a.rows();
   if (n == 0 || a.cols() != n) throw std::invalid_argument("plant: A must be square, n >= 1");

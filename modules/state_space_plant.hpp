@@ -19,8 +19,8 @@ class StateSpacePlant {
  public:
   // A: n×n, B: n×m, C: p×n, D: p×m (empty D = zero). Throws std::invalid_argument on
   // inconsistent dimensions or dt <= 0.
-  StateSpacePlant(Eigen::MatrixXd a, Eigen::MatrixXd b, Eigen::MatrixXd c, Eigen::MatrixXd d,
-                  double dt);
+  StateSpacePlant(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, Eigen::MatrixXd c,
+                  Eigen::MatrixXd d, double dt);
 
   size_t states() const { return static_cast<size_t>(ad_.rows()); }
   size_t inputs() const { return static_cast<size_t>(bd_.cols()); }

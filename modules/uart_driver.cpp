@@ -47,7 +47,6 @@ speed_t termios_speed(uint32_t baud) {
     // 31200 Bd has no termios constant; the terminal reports the next standard rate while the
     // line thread paces at the exact 31200 Bd.
     case 31200:
-      return B38400;
     case 38400:
       return B38400;
     case 57600:
