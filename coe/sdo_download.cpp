@@ -104,15 +104,9 @@ AbortCode SdoServer::commit_download(Object& obj, uint8_t subindex, bool ca,
 
 size_t SdoServer::download_initiate(std::span<const uint8_t> body, std::span<uint8_t> reply,
                                     EsmState state) {
-  transfer_ = {};  // a new initiate ends any stale transfer
-  const uint8_t cmd = body[0];
-  const uint16_t index = get_le16(&body[1]);
-  const uint8_t subindex = body[3];
-  const bool ca = (cmd & sdo::kCompleteAccess) != 0;
-  Object* obj = od_.find(index);
+  const auto [cmd, index, subindex, ca, obj] = begin_initiate(body);
   if (!obj) {
-    return abort(reply, index, subindex,
-                 od_.size() ? AbortCode::ObjectNotFound : AbortCode::NoDictionary);
+    return abort(reply, index, subindex, missing_object());
   }
 
   AbortCode rc = AbortCode::None;

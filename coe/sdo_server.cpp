@@ -172,6 +172,17 @@ size_t SdoServer::sdo_request(std::span<const uint8_t> body, std::span<uint8_t> 
   }
 }
 
+SdoServer::InitiateRequest SdoServer::begin_initiate(std::span<const uint8_t> body) {
+  transfer_ = {};
+  const uint8_t cmd = body[0];
+  const uint16_t index = get_le16(&body[1]);
+  return {cmd, index, body[3], (cmd & sdo::kCompleteAccess) != 0, od_.find(index)};
+}
+
+AbortCode SdoServer::missing_object() const {
+  return od_.size() ? AbortCode::ObjectNotFound : AbortCode::NoDictionary;
+}
+
 size_t SdoServer::poll(std::span<uint8_t> reply) {
   if (reply.size() < kMinReply) {
     return 0;

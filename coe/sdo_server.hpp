@@ -95,6 +95,19 @@ class SdoServer {
   size_t abort(std::span<uint8_t> reply, uint16_t index, uint8_t subindex, AbortCode code);
   size_t dispatch(std::span<const uint8_t> request, std::span<uint8_t> reply, EsmState state);
   size_t sdo_request(std::span<const uint8_t> body, std::span<uint8_t> reply, EsmState state);
+  // What every initiate request, upload or download, starts with (ETG.1000.6 Tables 35, 36,
+  // 38): command byte, index, subindex; plus the object they address (nullptr when none).
+  struct InitiateRequest {
+    uint8_t cmd;
+    uint16_t index;
+    uint8_t subindex;
+    bool complete_access;
+    Object* obj;
+  };
+  // Decodes an initiate request and looks its object up; a new initiate ends any stale transfer.
+  InitiateRequest begin_initiate(std::span<const uint8_t> body);
+  // The abort code for an index the dictionary lacks (an empty one is no dictionary at all).
+  AbortCode missing_object() const;
 
   // Upload (sdo_upload.cpp).
   size_t upload_initiate(std::span<const uint8_t> body, std::span<uint8_t> reply, EsmState state);
