@@ -2,7 +2,8 @@
 # Sets up and runs every test of rackcat: the README's test command, and what CI runs.
 #
 #   1. scripts/setup.sh (Debian + PyPI packages, idempotent)
-#   2. release build (gcc) -> GoogleTest suite under ctest
+#   2. release build (gcc) -> GoogleTest suite under ctest, then clang-tidy over the library
+#      and app sources (scripts/tidy.sh: any finding fails)
 #   3. wire interop against real masters over veth pairs in private network namespaces:
 #      pysoem (pytest, tests/interop) and ethercrab (scripts/ethercrab_interop.sh); they skip
 #      with a message when not root
@@ -30,6 +31,9 @@ cmake --build build -j "$JOBS"
 
 step "unit tests (release)"
 ctest --test-dir build --output-on-failure -j "$JOBS" --timeout 300
+
+step "clang-tidy (library and app sources)"
+bash scripts/tidy.sh build
 
 if [ "${SKIP_INTEROP:-0}" != 1 ]; then
   step "interop: pysoem over veth"
