@@ -23,6 +23,10 @@ floor (target: p50 and p99 within 1.3x). Exit status 1 when a ratio is over 1.3.
 The slave command is a template ({iface}, {slaves}); --busy-poll is appended in busy-poll
 mode. The same works for `build/rackcat run --iface {iface}`.
 
+--fifo PRIO runs the pinger and both responders under SCHED_FIFO (chrt), which takes the
+other processes of a shared machine out of the comparison (diagnosis; the target is measured
+without it).
+
 With --sync-seconds S (and pysoem installed), each mode also runs the slave with DC SYNC0 at
 1 ms under a pysoem master cycling at 1 ms for S seconds, and prints the SYNC0 jitter line the
 slave reports on exit (ecat_wire_slave prints one; other slaves may not).
@@ -193,10 +197,18 @@ def main():
                     help="also measure SYNC0 jitter under a 1 ms pysoem master for S seconds")
     ap.add_argument("--pin", action="store_true",
                     help="pin the pinger to CPU 0 and the responders to CPU 1 (taskset)")
+    ap.add_argument("--fifo", type=int, default=0, metavar="PRIO",
+                    help="run pinger and responders as SCHED_FIFO PRIO (chrt), so that other "
+                         "processes on a shared machine do not delay them; 0 = off")
     args = ap.parse_args()
     if args.pin:
         PIN["pinger"] = ["taskset", "-c", "0"]
         PIN["responder"] = ["taskset", "-c", "1"]
+    if args.fifo > 0:
+        # Diagnostic isolation, not the target's measurement: a spinning SCHED_FIFO responder
+        # keeps its core to itself except for the kernel's RT throttling share (5 %).
+        for k in PIN:
+            PIN[k] = ["chrt", "-f", str(args.fifo)] + PIN[k]
     if os.geteuid() != 0:
         sys.exit("wire_bench: needs root (network namespace, veth pairs, raw sockets)")
     build = Path(args.build_dir).resolve()
