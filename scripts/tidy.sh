@@ -48,7 +48,7 @@ for f in "${files[@]}"; do
   if [ "$(cat "$log.rc")" != 0 ]; then
     failed=$((failed + 1))
     # Show the full output (with the source excerpts) of every file that failed.
-    grep -v -E '^[0-9]+ (warnings?|errors?) (generated|treated as errors)\.?$' "$log.txt" || true
+    grep -v -E '^[0-9]+ (warning|error)s? (generated|treated as errors?)\.?$' "$log.txt" || true
   fi
 done
 
