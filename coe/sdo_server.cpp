@@ -1,4 +1,4 @@
-// Mailbox framing, request dispatch, mailbox counter / repeat handling and the unsolicited
+// Mailbox framing, request dispatch, mailbox counter / double writes and the unsolicited
 // message queue of the SDO server (ETG.1000.4 §5.6, ETG.1000.6 §5.2 and §5.6.1).
 #include "coe/sdo_server.hpp"
 
@@ -35,7 +35,6 @@ void SdoServer::reset() {
   info_ = {};
   last_request_counter_ = 0;
   last_request_len_ = 0;
-  last_reply_len_ = 0;
 }
 
 bool SdoServer::queue_emergency(uint16_t error_code, uint8_t error_register,
@@ -94,13 +93,15 @@ size_t SdoServer::handle(std::span<const uint8_t> request, std::span<uint8_t> re
   }
   const auto msg = request.first(MailboxHeader::kSize + hdr->length);
 
-  // A repeat of the previous request (same non-zero counter, same bytes) gets the previous
-  // reply again: the master lost it and must not have the request executed twice.
-  if (hdr->counter != 0 && hdr->counter == last_request_counter_ && last_reply_len_ != 0 &&
-      msg.size() == last_request_len_ && last_reply_len_ <= reply.size() &&
+  // A double write (ETG.1000.4 §5.6, mailbox header Cnt: "detection of double write"): the
+  // master resent a mailbox write whose working counter it missed (SOEM does after 2 ms). The
+  // reply to the first write is already on its way, so the repeat is dropped: a second copy
+  // would be taken for the answer to the master's next request. A master that lost a reply
+  // asks for it with the SM1 repeat request instead, which the ESC serves.
+  if (hdr->counter != 0 && hdr->counter == last_request_counter_ &&
+      msg.size() == last_request_len_ &&
       std::memcmp(msg.data(), last_request_.data(), msg.size()) == 0) {
-    std::memcpy(reply.data(), last_reply_.data(), last_reply_len_);
-    return last_reply_len_;
+    return 0;
   }
 
   // A new request ends any SDO Information fragments still queued for an earlier one.
@@ -108,15 +109,8 @@ size_t SdoServer::handle(std::span<const uint8_t> request, std::span<uint8_t> re
   const size_t n = dispatch(msg, reply, state);
 
   last_request_counter_ = hdr->counter;
-  if (msg.size() <= last_request_.size() && n <= last_reply_.size()) {
-    std::memcpy(last_request_.data(), msg.data(), msg.size());
-    last_request_len_ = msg.size();
-    std::memcpy(last_reply_.data(), reply.data(), n);
-    last_reply_len_ = n;
-  } else {
-    last_request_len_ = 0;
-    last_reply_len_ = 0;
-  }
+  last_request_len_ = msg.size() <= last_request_.size() ? msg.size() : 0;
+  std::memcpy(last_request_.data(), msg.data(), last_request_len_);
   return n;
 }
 

@@ -7,7 +7,7 @@
 // Emergency (queued, sent by poll()), SDO aborts (CoE service 2, command 0x80, 10 bytes) and
 // mailbox errors (mailbox type 0). Mailbox counter: every message the server sends carries its
 // own counter 1..7; a request repeating the master's previous non-zero counter (and bytes) is
-// a repeat and gets the previous reply again without being executed twice (ETG.1000.4 §5.6).
+// a double write (ETG.1000.4 §5.6) and is dropped: no reply, not executed twice.
 //
 // One server per slave; its transfer state is per server, so several slaves run side by side.
 // Construction sizes every buffer; handle() and poll() allocate nothing.
@@ -30,7 +30,7 @@ namespace rackcat::coe {
 
 class SdoServer {
  public:
-  // Largest mailbox the server caches for repeats (an SM of up to 1486 bytes fits a frame).
+  // Largest mailbox kept to recognise double writes (an SM of up to 1486 bytes fits a frame).
   static constexpr size_t kMaxMailbox = 1486;
   static constexpr size_t kEmergencySlots = 16;
 
@@ -56,7 +56,7 @@ class SdoServer {
   size_t pending_emergencies() const { return emergencies_.size(); }
   size_t emergency_overruns() const { return emergencies_.overruns(); }
 
-  // Drops transfer, fragment and repeat state (e.g. the ESM went back to INIT: the mailbox
+  // Drops transfer, fragment and double-write state (e.g. the ESM went back to INIT: the mailbox
   // restarts and so does the master's counter). Queued emergencies stay. handle(), poll() and
   // reset() belong to one thread (the mailbox side).
   void reset();
@@ -148,9 +148,7 @@ class SdoServer {
   uint8_t counter_ = 0;  // our last counter (1..7)
   uint8_t last_request_counter_ = 0;
   size_t last_request_len_ = 0;
-  size_t last_reply_len_ = 0;
   std::array<uint8_t, kMaxMailbox> last_request_{};
-  std::array<uint8_t, kMaxMailbox> last_reply_{};
 };
 
 }  // namespace rackcat::coe

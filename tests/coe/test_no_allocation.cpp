@@ -67,9 +67,8 @@ TEST_F(SdoTest, RequestPathMakesNoHeapAllocation) {
   add(8, {0x05, 0x00, 0x00, 0x00, 0x18, 0x10, 0x01, 0x78});  // entry description
   add(8, {0x03, 0x00, 0x00, 0x00, 0x34, 0x12});              // info error
   add(5, {0x00});                                            // mailbox error
-  Bytes repeat = requests.front();
-  requests.push_back(repeat);
-  requests.push_back(repeat);  // repeat
+  const Bytes repeat = requests.front();
+  requests.push_back(repeat);  // the same bytes after other requests: a new request
   int hooked = 0;
   od.find(0x2009)->hooks.validate_write = [](const Object&, int, std::span<const uint8_t>,
                                              EsmState) { return AbortCode::None; };
@@ -85,9 +84,11 @@ TEST_F(SdoTest, RequestPathMakesNoHeapAllocation) {
     server.queue_emergency(0x1000, 1);
     lengths.push_back(server.poll(reply));
   }
+  const size_t double_write = server.handle(repeat, reply, EsmState::PreOp);  // dropped
   const long after = g_allocations.load();
 
   EXPECT_EQ(after - before, 0);
+  EXPECT_EQ(double_write, 0u);
   EXPECT_EQ(hooked, 1);
   for (size_t n : lengths) EXPECT_GT(n, 0u);
 }

@@ -414,12 +414,15 @@ def test_mailbox_flood_counters_toggle_and_abandoned_transfers_then_op(rackcat):
             time.sleep(0.05)
             assert mbx.read()[0] == 0, "a request written into a full mailbox was executed"
 
-            # Repeated mailbox counter: the same non-zero counter and bytes again is a repeat;
-            # the previous reply comes back byte for byte (its own counter included) and
-            # nothing executes twice (docs/COE.md "Mailbox counter").
+            # Repeated mailbox counter: the same non-zero counter and bytes again is the master
+            # retransmitting a write (ETG.1000.4 §5.6 "double write"): dropped, no second
+            # reply, nothing executes twice (docs/COE.md "Mailbox counter").
             a = mbx.sdo(5, 0x40, 0x1018, 2)
-            b = mbx.sdo(5, 0x40, 0x1018, 2)
-            assert b[5] == a[5], "a repeated request was not answered with the previous reply"
+            body = struct.pack("<BHB", 0x40, 0x1018, 2) + bytes(4)
+            again = mbx.request(5, COE_SDO_REQUEST, body)
+            assert mbx.write(again) == 1
+            time.sleep(0.05)
+            assert mbx.read()[0] == 0, "a repeated mailbox write was answered a second time"
             c = mbx.sdo(6, 0x40, 0x1018, 2)
             assert c[4] != a[4], "a new request got the previous reply's mailbox counter"
             assert struct.unpack("<I", c[3])[0] == product
