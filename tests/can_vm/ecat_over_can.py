@@ -315,6 +315,10 @@ def main():
             time.sleep(delay)
         else:
             next_t = time.monotonic()
+    master.read_state()
+    if s.state != pysoem.OP_STATE:  # e.g. 0x001B: the emulated CPUs stalled past the watchdog
+        result("FAIL", stage="left_op_while_cycling", state=hex(s.state),
+               al_status=hex(s.al_status), bad_wkc=bad_wkc)
     if len(ages_ms) < AGE_CYCLES * 0.9:
         result("FAIL", stage="op_cycles", bad_wkc=bad_wkc, cycles=AGE_CYCLES)
     ages_ms.sort()
