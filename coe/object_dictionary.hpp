@@ -62,6 +62,19 @@ struct Entry {
   uint16_t byte_length() const { return static_cast<uint16_t>((bit_length + 7) / 8); }
 };
 
+// An entry with the fields every dictionary sets (the optional ones stay at their defaults).
+inline Entry make_entry(uint8_t subindex, std::string name, DataType type, uint16_t bits,
+                        uint16_t access, std::vector<uint8_t> default_value = {}) {
+  Entry e;
+  e.subindex = subindex;
+  e.name = std::move(name);
+  e.data_type = static_cast<uint16_t>(type);
+  e.bit_length = bits;
+  e.access = access;
+  e.default_value = std::move(default_value);
+  return e;
+}
+
 class Object;
 
 // Live values and command objects. All hooks are optional; a hook runs on the request path and

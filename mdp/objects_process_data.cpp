@@ -20,14 +20,8 @@ Object io_object(const Module& m, const IoLayout& l) {
   const uint16_t a = l.output ? (acc("rw") | kRx) : (acc("ro") | kTx);
   o.add(sub0(static_cast<uint8_t>(l.entries + (has_pad ? 1 : 0))));
   for (uint8_t s = 1; s <= l.entries; ++s) {
-    Entry e;
-    e.subindex = s;
-    e.name = l.entry_name(s);
-    e.data_type = static_cast<uint16_t>(l.entry_type);
-    e.bit_length = l.entry_bits;
-    e.access = a;
-    e.default_value.assign((l.entry_bits + 7) / 8, 0);
-    o.add(std::move(e));
+    o.add(coe::make_entry(s, l.entry_name(s), l.entry_type, l.entry_bits, a,
+                          std::vector<uint8_t>((l.entry_bits + 7) / 8, 0)));
   }
   if (has_pad) o.add(pad(static_cast<uint8_t>(l.entries + 1), l.pad_bits));
   o.finalize();

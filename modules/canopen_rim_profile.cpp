@@ -80,27 +80,14 @@ void lay_out(std::vector<RimChannel>& list, size_t& bytes, size_t& words, size_t
   total = words ? word_offset : bytes;
 }
 
-// One dictionary entry (fields set one by one: Entry has many optional members).
-coe::Entry make_entry(uint8_t subindex, std::string name, coe::DataType type, uint16_t bits,
-                      uint16_t access, std::vector<uint8_t> value = {}) {
-  coe::Entry e;
-  e.subindex = subindex;
-  e.name = std::move(name);
-  e.data_type = static_cast<uint16_t>(type);
-  e.bit_length = bits;
-  e.access = access;
-  e.default_value = std::move(value);
-  return e;
-}
-
 coe::Object& add_array(coe::ObjectDictionary& od, uint16_t index, const char* name,
                        coe::DataType type, uint16_t bits, size_t count, uint16_t access) {
   coe::Object obj(index, coe::ObjectCode::Array, name, static_cast<uint16_t>(type));
-  obj.add(make_entry(0, "Number of entries", coe::DataType::Unsigned8, 8, coe::access::kRo,
-                     std::vector<uint8_t>{static_cast<uint8_t>(count)}));
+  obj.add(coe::make_entry(0, "Number of entries", coe::DataType::Unsigned8, 8, coe::access::kRo,
+                          std::vector<uint8_t>{static_cast<uint8_t>(count)}));
   for (size_t i = 1; i <= count; ++i) {
-    obj.add(make_entry(static_cast<uint8_t>(i), std::string(name) + " " + std::to_string(i), type,
-                       bits, access));
+    obj.add(coe::make_entry(static_cast<uint8_t>(i), std::string(name) + " " + std::to_string(i),
+                            type, bits, access));
   }
   obj.finalize();
   return od.add(std::move(obj));
@@ -109,7 +96,7 @@ coe::Object& add_array(coe::ObjectDictionary& od, uint16_t index, const char* na
 void add_var(coe::ObjectDictionary& od, uint16_t index, const char* name, coe::DataType type,
              uint16_t bits, uint16_t access, std::vector<uint8_t> value) {
   coe::Object obj(index, coe::ObjectCode::Var, name, static_cast<uint16_t>(type));
-  obj.add(make_entry(0, name, type, bits, access, std::move(value)));
+  obj.add(coe::make_entry(0, name, type, bits, access, std::move(value)));
   obj.finalize();
   od.add(std::move(obj));
 }
@@ -144,11 +131,11 @@ void add_pdo_objects(coe::ObjectDictionary& od, const RimProfile& p, bool transm
     coe::Object comm(
         static_cast<uint16_t>((transmit ? 0x1800 : 0x1400) + k), coe::ObjectCode::Record,
         transmit ? "TPDO communication parameter" : "RPDO communication parameter", 0x0020);
-    comm.add(make_entry(0, "Highest sub-index supported", coe::DataType::Unsigned8, 8,
-                        coe::access::kRo, std::vector<uint8_t>{2}));
-    comm.add(make_entry(1, "COB-ID", coe::DataType::Unsigned32, 32, coe::access::kRo,
-                        le32(pdo_cob_id(transmit, k, p.rim))));
-    comm.add(make_entry(
+    comm.add(coe::make_entry(0, "Highest sub-index supported", coe::DataType::Unsigned8, 8,
+                             coe::access::kRo, std::vector<uint8_t>{2}));
+    comm.add(coe::make_entry(1, "COB-ID", coe::DataType::Unsigned32, 32, coe::access::kRo,
+                             le32(pdo_cob_id(transmit, k, p.rim))));
+    comm.add(coe::make_entry(
         2, "Transmission type", coe::DataType::Unsigned8, 8, coe::access::kRo,
         std::vector<uint8_t>{0xFE}));  // event-driven (manufacturer-specific): cyclic here
     comm.finalize();
@@ -163,12 +150,13 @@ void add_pdo_objects(coe::ObjectDictionary& od, const RimProfile& p, bool transm
     coe::Object mapping(static_cast<uint16_t>((transmit ? 0x1A00 : 0x1600) + k),
                         coe::ObjectCode::Record,
                         transmit ? "TPDO mapping parameter" : "RPDO mapping parameter", 0x0021);
-    mapping.add(make_entry(0, "Number of mapped objects", coe::DataType::Unsigned8, 8,
-                           coe::access::kRo,
-                           std::vector<uint8_t>{static_cast<uint8_t>(entries.size())}));
+    mapping.add(coe::make_entry(0, "Number of mapped objects", coe::DataType::Unsigned8, 8,
+                                coe::access::kRo,
+                                std::vector<uint8_t>{static_cast<uint8_t>(entries.size())}));
     for (size_t i = 0; i < entries.size(); ++i) {
-      mapping.add(make_entry(static_cast<uint8_t>(i + 1), "Mapped object " + std::to_string(i + 1),
-                             coe::DataType::Unsigned32, 32, coe::access::kRo, le32(entries[i])));
+      mapping.add(
+          coe::make_entry(static_cast<uint8_t>(i + 1), "Mapped object " + std::to_string(i + 1),
+                          coe::DataType::Unsigned32, 32, coe::access::kRo, le32(entries[i])));
     }
     mapping.finalize();
     od.add(std::move(mapping));
@@ -348,10 +336,11 @@ coe::ObjectDictionary rim_dictionary(const RimProfile& p, uint16_t heartbeat_ms,
   {
     coe::Object obj(0x1016, coe::ObjectCode::Array, "Consumer heartbeat time",
                     static_cast<uint16_t>(DataType::Unsigned32));
-    obj.add(make_entry(0, "Highest sub-index supported", DataType::Unsigned8, 8, access::kRo,
-                       std::vector<uint8_t>{1}));
-    obj.add(make_entry(1, "Consumer heartbeat time 1", DataType::Unsigned32, 32, access::kRo,
-                       le32(consumer_ms ? (uint32_t{kControlModuleNode} << 16) | consumer_ms : 0)));
+    obj.add(coe::make_entry(0, "Highest sub-index supported", DataType::Unsigned8, 8, access::kRo,
+                            std::vector<uint8_t>{1}));
+    obj.add(coe::make_entry(
+        1, "Consumer heartbeat time 1", DataType::Unsigned32, 32, access::kRo,
+        le32(consumer_ms ? (uint32_t{kControlModuleNode} << 16) | consumer_ms : 0)));
     obj.finalize();
     od.add(std::move(obj));
   }
@@ -360,14 +349,14 @@ coe::ObjectDictionary rim_dictionary(const RimProfile& p, uint16_t heartbeat_ms,
   add_var(od, 0x1017, "Producer heartbeat time", DataType::Unsigned16, 16, access::kRw, hb);
 
   coe::Object id(0x1018, coe::ObjectCode::Record, "Identity object", 0x0023);
-  id.add(make_entry(0, "Highest sub-index supported", DataType::Unsigned8, 8, access::kRo,
-                    std::vector<uint8_t>{4}));
+  id.add(coe::make_entry(0, "Highest sub-index supported", DataType::Unsigned8, 8, access::kRo,
+                         std::vector<uint8_t>{4}));
   const uint32_t values[4] = {p.identity.vendor_id, p.identity.product_code, p.identity.revision,
                               p.identity.serial};
   const char* names[4] = {"Vendor-ID", "Product code", "Revision number", "Serial number"};
   for (uint8_t i = 0; i < 4; ++i) {
-    id.add(make_entry(static_cast<uint8_t>(i + 1), names[i], DataType::Unsigned32, 32, access::kRo,
-                      le32(values[i])));
+    id.add(coe::make_entry(static_cast<uint8_t>(i + 1), names[i], DataType::Unsigned32, 32,
+                           access::kRo, le32(values[i])));
   }
   id.finalize();
   od.add(std::move(id));

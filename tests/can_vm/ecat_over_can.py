@@ -341,13 +341,17 @@ def main():
     t_kill = time.monotonic()
     rims[2].kill()
     rims[2].wait()
-    offline_ms = None
-    while ms_since(t_kill) < 3000:
-        cycle()
-        if rim2_state() & 0x3 == 0:
-            offline_ms = ms_since(t_kill)
-            break
-        time.sleep(0.001)
+    def wait_rim2(state, since, limit_ms, pause_s):
+        """ms from `since` until 0x2021:08 bits 1..0 read `state`, cycling meanwhile; None
+        after limit_ms."""
+        while ms_since(since) < limit_ms:
+            cycle()
+            if rim2_state() & 0x3 == state:
+                return ms_since(since)
+            time.sleep(pause_s)
+        return None
+
+    offline_ms = wait_rim2(0, t_kill, 3000, 0.001)
     if offline_ms is None:
         result("FAIL", stage="kill_rim2", state=hex(rim2_state()))
     for _ in range(100):
@@ -362,13 +366,7 @@ def main():
     # 5. Plug it back: ONLINE, acknowledge, OP again with the loopback working.
     t_restart = time.monotonic()
     rims[2] = spawn_rim(rackcat, 2)
-    online_ms = None
-    while ms_since(t_restart) < 10_000:
-        cycle()
-        if rim2_state() & 0x3 == 2:
-            online_ms = ms_since(t_restart)
-            break
-        time.sleep(0.005)
+    online_ms = wait_rim2(2, t_restart, 10_000, 0.005)
     if online_ms is None:
         result("FAIL", stage="restart_rim2", state=hex(rim2_state()))
     acknowledge_safeop()

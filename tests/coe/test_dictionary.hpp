@@ -18,14 +18,7 @@ inline std::vector<uint8_t> le(uint64_t v, size_t n) {
 
 inline Entry entry(uint8_t sub, std::string name, DataType type, uint16_t bits, uint16_t acc,
                    std::vector<uint8_t> def = {}) {
-  Entry e;
-  e.subindex = sub;
-  e.name = std::move(name);
-  e.data_type = static_cast<uint16_t>(type);
-  e.bit_length = bits;
-  e.access = acc;
-  e.default_value = std::move(def);
-  return e;
+  return make_entry(sub, std::move(name), type, bits, acc, std::move(def));
 }
 
 inline Object var(uint16_t index, std::string name, DataType type, uint16_t bits, uint16_t acc,

@@ -290,17 +290,22 @@ def run_cycles(master, n, until=None, sleep=True):
     return wkc
 
 
-def store_parameters(slave, timeout_s=5.0):
-    """0xFBF2 Store Parameters: write "save" to :01, then poll :02 until it leaves 255
-    (executing); 0/1 = done, 2 = error (ETG.5003.1 command object, docs/MDP.md)."""
-    slave.sdo_write(0xFBF2, 1, STORE_SAVE)
+def run_command(slave, index, command, timeout_s=5.0):
+    """A command object (ETG.5003.1, docs/MDP.md): write the command bytes to :01, then poll
+    :02 until it leaves 255 (executing); returns it (0/1 = done, 2 = error)."""
+    slave.sdo_write(index, 1, command)
     deadline = time.monotonic() + timeout_s
     while True:
-        status = slave.sdo_read(0xFBF2, 2)[0]
+        status = slave.sdo_read(index, 2)[0]
         if status != 255:
             return status
-        assert time.monotonic() < deadline, "0xFBF2 still executing"
+        assert time.monotonic() < deadline, f"0x{index:04X} still executing"
         time.sleep(0.02)
+
+
+def store_parameters(slave, timeout_s=5.0):
+    """0xFBF2 Store Parameters: "save"."""
+    return run_command(slave, 0xFBF2, STORE_SAVE, timeout_s)
 
 
 def wait_loopback(master, do, di, value, cycles=300):

@@ -5,7 +5,7 @@ that survives a restart of `rackcat run` with the same --state-dir.
 import struct
 import time
 
-from rackcat_helpers import (DEFAULT_MODULES, abort_code, go, open_master, pysoem,
+from rackcat_helpers import (DEFAULT_MODULES, abort_code, go, open_master, pysoem, run_command,
                              rackcat, run_cycles, store_parameters, to_op)
 
 assert rackcat  # the fixture, imported for pytest
@@ -112,15 +112,8 @@ def test_ipv4_stored_survives_restart_and_is_read_only_in_op(rackcat, tmp_path):
 
 
 def detect_modules(slave, timeout_s=5.0):
-    """0xF002 Detect Modules Command: "scan" (0x73 0x63 0x61 0x6E) to :01, poll :02."""
-    slave.sdo_write(0xF002, 1, b"scan")
-    deadline = time.monotonic() + timeout_s
-    while True:
-        status = slave.sdo_read(0xF002, 2)[0]
-        if status != 255:
-            return status
-        assert time.monotonic() < deadline, "0xF002 still executing"
-        time.sleep(0.02)
+    """0xF002 Detect Modules Command: "scan" (0x73 0x63 0x61 0x6E)."""
+    return run_command(slave, 0xF002, b"scan", timeout_s)
 
 
 def request_safeop(master):

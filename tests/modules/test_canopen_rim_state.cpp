@@ -260,14 +260,18 @@ TEST_F(RimLinkRack, ThreadedLinkCarriesInputsOutputsAndStates) {
   node->set_source(3, 4, std::make_unique<ConstantSource>(1.0));  // CDI-10/X8 channel 4
   node->start(now);
   to_op();
-  for (int i = 0; i < 100; ++i) {
-    now += kMs;
-    node->step(now);
-    link.poll(now);
-    for (auto& f : posted) f();
-    posted.clear();
-    cycle();
-  }
+  // One millisecond of RIM, link thread, posted state changes and device cycle.
+  auto run_ms = [&](int ms) {
+    for (int i = 0; i < ms; ++i) {
+      now += kMs;
+      node->step(now);
+      link.poll(now);
+      for (auto& f : posted) f();
+      posted.clear();
+      cycle();
+    }
+  };
+  run_ms(100);
   EXPECT_EQ(link.master().state(2), RimState::Online) << link.master().reason(2);
   EXPECT_EQ(obj(0x2021).get_u(8) & 3u, 2u);
   EXPECT_EQ(at(2, 3).inputs()[4].value, 1.0);
@@ -276,14 +280,7 @@ TEST_F(RimLinkRack, ThreadedLinkCarriesInputsOutputsAndStates) {
   // its 0x7nn0 object as the master's output data would.
   CardDriver& dout = at(2, 7);
   module_obj(dout, 0x7000, 0).set_u(1, 1u << 2);
-  for (int i = 0; i < 10; ++i) {
-    now += kMs;
-    node->step(now);
-    link.poll(now);
-    for (auto& f : posted) f();
-    posted.clear();
-    cycle();
-  }
+  run_ms(10);
   EXPECT_EQ(dout.outputs()[2].driven, 1.0);
   EXPECT_EQ(node->output(7, 2), 1.0);
   EXPECT_EQ(node->output(7, 3), 0.0);
