@@ -16,7 +16,7 @@
 #include "apps/commands.hpp"
 #include "apps/rack_loading.hpp"
 #include "apps/rack_slave.hpp"
-#include "ecat/runner.hpp"
+#include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
 #include "mdp/rack_config.hpp"
 #include "modules/canopen_socketcan.hpp"

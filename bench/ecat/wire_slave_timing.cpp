@@ -26,7 +26,7 @@
 
 #include "apps/rack_loading.hpp"
 #include "apps/rack_slave.hpp"
-#include "ecat/raw_socket_link.hpp"
+#include "ecat/host/raw_socket_link.hpp"
 #include "ecat/segment.hpp"
 
 namespace {

@@ -10,9 +10,9 @@
 #include <iterator>
 #include <thread>
 
-#include "ecat/event_loop.hpp"
-#include "ecat/pcap_writer.hpp"
-#include "ecat/raw_socket_link.hpp"
+#include "ecat/host/event_loop.hpp"
+#include "ecat/host/pcap_writer.hpp"
+#include "ecat/host/raw_socket_link.hpp"
 #include "tests/ecat/link_test_util.hpp"
 
 namespace rackcat::ecat {

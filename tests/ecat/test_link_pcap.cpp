@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "ecat/pcap_writer.hpp"
+#include "ecat/host/pcap_writer.hpp"
 
 namespace rackcat::ecat {
 namespace {

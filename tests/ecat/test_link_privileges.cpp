@@ -7,8 +7,8 @@
 #include <fstream>
 #include <string>
 
-#include "ecat/privileges.hpp"
-#include "ecat/raw_socket_link.hpp"
+#include "ecat/host/privileges.hpp"
+#include "ecat/host/raw_socket_link.hpp"
 #include "tests/ecat/link_test_util.hpp"
 
 namespace rackcat::ecat {

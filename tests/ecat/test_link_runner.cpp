@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-#include "ecat/runner.hpp"
+#include "ecat/host/runner.hpp"
 #include "tests/ecat/link_test_util.hpp"
 
 namespace rackcat::ecat {

@@ -14,8 +14,8 @@
 #include <cstring>
 #include <vector>
 
-#include "ecat/privileges.hpp"
-#include "ecat/raw_socket_link.hpp"
+#include "ecat/host/privileges.hpp"
+#include "ecat/host/raw_socket_link.hpp"
 #include "tests/ecat/link_test_util.hpp"
 
 namespace rackcat::ecat {

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "ecat/runner.hpp"
+#include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
 #include "tests/ecat_wire_slave/loopback_application.hpp"
 

@@ -1,4 +1,4 @@
-#include "ecat/runner.hpp"
+#include "ecat/host/runner.hpp"
 
 namespace rackcat::ecat {
 namespace {

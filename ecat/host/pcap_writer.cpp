@@ -1,4 +1,4 @@
-#include "ecat/pcap_writer.hpp"
+#include "ecat/host/pcap_writer.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "ecat/raw_socket_link.hpp"
+#include "ecat/host/raw_socket_link.hpp"
 
 #include <arpa/inet.h>
 #include <linux/filter.h>

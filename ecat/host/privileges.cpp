@@ -1,4 +1,4 @@
-#include "ecat/privileges.hpp"
+#include "ecat/host/privileges.hpp"
 
 #include <grp.h>
 #include <linux/capability.h>

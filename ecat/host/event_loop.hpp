@@ -25,7 +25,7 @@
 #include <span>
 #include <vector>
 
-#include "ecat/raw_socket_link.hpp"
+#include "ecat/host/raw_socket_link.hpp"
 
 namespace rackcat::ecat {
 

@@ -1,4 +1,4 @@
-#include "ecat/event_loop.hpp"
+#include "ecat/host/event_loop.hpp"
 
 #include <poll.h>
 #include <sys/eventfd.h>
@@ -9,7 +9,7 @@
 #include <csignal>
 #include <ctime>
 
-#include "ecat/pcap_writer.hpp"
+#include "ecat/host/pcap_writer.hpp"
 
 namespace rackcat::ecat {
 namespace {

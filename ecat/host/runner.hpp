@@ -19,10 +19,10 @@
 #include <memory>
 #include <string>
 
-#include "ecat/event_loop.hpp"
-#include "ecat/pcap_writer.hpp"
-#include "ecat/privileges.hpp"
-#include "ecat/raw_socket_link.hpp"
+#include "ecat/host/event_loop.hpp"
+#include "ecat/host/pcap_writer.hpp"
+#include "ecat/host/privileges.hpp"
+#include "ecat/host/raw_socket_link.hpp"
 #include "ecat/segment.hpp"
 
 namespace rackcat::ecat {
