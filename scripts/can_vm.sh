@@ -22,6 +22,7 @@ test_bin=$(realpath "$test_bin")
 rackcat=$(realpath "$rackcat")
 ecat_test=$(realpath "$(dirname "$0")/../tests/can_vm/ecat_over_can.py")
 check_capture=$(realpath "$(dirname "$0")/../tests/can_vm/check_can_capture.py")
+. "$(dirname "$0")/python.sh" 2>/dev/null  # PY: the project's Python (.venv) with pysoem
 
 verdict() {  # verdict LOG CAPTURE: the two result lines of the log, then the CAN capture
   local line ecat cap=
@@ -50,7 +51,7 @@ if python3 -c 'import socket; socket.socket(socket.AF_CAN, socket.SOCK_RAW, sock
   trap 'rm -rf "$tmp"' EXIT
   timeout 50 "$test_bin" "$rackcat" vcan0 >"$tmp/log" 2>&1
   # Its own network namespace: vcan1 and the veth pair vanish with it.
-  RACKCAT_CAN_CAPTURE=$tmp/can.pcapng timeout 90 unshare --net python3 "$ecat_test" "$rackcat" \
+  RACKCAT_CAN_CAPTURE=$tmp/can.pcapng timeout 90 unshare --net "$PY" "$ecat_test" "$rackcat" \
     >>"$tmp/log" 2>&1
   verdict "$tmp/log" "$tmp/can.pcapng"
 fi
@@ -114,11 +115,13 @@ for path in "${order[@]}"; do
   esac
   echo "$name" >>"$root/modules/order"
 done
-# The EtherCAT stage runs in the host's root (chroot over 9p) with the host's python3.
-py=$(python3 -c 'import sys; print(sys.executable)' 2>/dev/null)
+# The EtherCAT stage runs in the host's root (chroot over 9p) with the project's Python
+# (.venv, scripts/python.sh). The host's /tmp stays as it is there (read-only), so a checkout
+# below /tmp is visible; the writable places are tmpfs on /run (TMPDIR) and the share /run/out.
+py=$("$PY" -c 'import sys; print(sys.executable)' 2>/dev/null)
 if [[ $ecat_mods == 1 && -n $py ]]; then
-  printf 'env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root PYTHONDONTWRITEBYTECODE=1 %s %s %q %q %q\n' \
-    "RACKCAT_CAN_BITRATE=${RACKCAT_CAN_BITRATE:-1mbit}" RACKCAT_CAN_CAPTURE=/tmp/out/can.pcapng \
+  printf 'env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root TMPDIR=/run/tmp PYTHONDONTWRITEBYTECODE=1 %q %q %q %q %q\n' \
+    "RACKCAT_CAN_BITRATE=${RACKCAT_CAN_BITRATE:-1mbit}" RACKCAT_CAN_CAPTURE=/run/out/can.pcapng \
     "$py" "$ecat_test" "$rackcat" >"$root/stage_ecat"
 fi
 cat >"$root/init" <<'INIT'
@@ -140,10 +143,9 @@ elif mkdir -p /host && mount -t 9p -o trans=virtio,version=9p2000.L,ro,msize=512
   mount -t proc proc /host/proc
   mount -t sysfs sys /host/sys
   mount -t devtmpfs dev /host/dev
-  mount -t tmpfs tmp /host/tmp
-  mkdir -p /host/tmp/out  # the writable share: the CAN capture comes back to the host here
-  mount -t 9p -o trans=virtio,version=9p2000.L,msize=512000 out /host/tmp/out
   mount -t tmpfs run /host/run
+  mkdir -p /host/run/tmp /host/run/out  # the writable share: the CAN capture comes back here
+  mount -t 9p -o trans=virtio,version=9p2000.L,msize=512000 out /host/run/out
   chroot /host /bin/sh -c "$(cat /stage_ecat)"
 else
   echo "CAN_VM_ECAT_RESULT FAIL reason=9p_mount_failed"

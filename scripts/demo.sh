@@ -18,11 +18,36 @@ if [ "$(id -u)" -ne 0 ]; then
   exit 2
 fi
 
-echo "== setting up (Debian and PyPI packages, once)"
-bash scripts/setup.sh >/dev/null
-echo "== building (release)"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)" --target rackcat >/dev/null
+echo "== setting up: only what the demo needs (scripts/setup.sh --demo; the tests add the rest)"
+bash scripts/setup.sh --demo
+. scripts/python.sh
+echo "== building the CLI (release, build/rackcat)"
+opts=()
+# The demo builds only the CLI: without GoogleTest (a test dependency) configure the build
+# without the test suite; scripts/test.sh turns it back on.
+dpkg-query -W -f='${Status}' libgtest-dev 2>/dev/null | grep -q "install ok installed" ||
+  opts+=(-DRACKCAT_TESTS=OFF -DRACKCAT_BENCH=OFF)
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release "${opts[@]}" >/dev/null
+# Ninja's progress ([done/total] step): one updating line on a terminal, every line otherwise;
+# on failure, the end of the build's output.
+progress() {
+  if [ -t 1 ]; then
+    local w=$(( $(tput cols 2>/dev/null || echo 100) - 4 ))
+    while IFS= read -r line; do printf '\r\033[K   %s' "${line:0:$w}"; done
+    echo
+  else
+    sed 's/^/   /'
+  fi
+}
+BUILD_LOG=$(mktemp)
+if ! cmake --build build -j "$(nproc)" --target rackcat 2>&1 | tee "$BUILD_LOG" | progress; then
+  echo "demo: the build failed; its last lines:" >&2
+  tail -n 40 "$BUILD_LOG" >&2
+  rm -f "$BUILD_LOG"
+  exit 1
+fi
+rm -f "$BUILD_LOG"
+[ -x build/rackcat ] || { echo "demo: the build failed" >&2; exit 1; }
 
 . scripts/netns.sh
 NS=rackcat-demo-$$
@@ -38,8 +63,8 @@ SLAVE=$!
 sleep 0.5
 if ! kill -0 "$SLAVE" 2>/dev/null; then cat "$STATE/rackcat.log"; exit 1; fi
 
-echo "== master: pysoem $(python3 -c 'import pysoem; print(pysoem.__version__)') on ecat-master"
-ip netns exec "$NS" python3 scripts/demo_master.py ecat-master --seconds "$SECONDS_LIVE"
+echo "== master: pysoem $("$PY" -c 'import pysoem; print(pysoem.__version__)') on ecat-master"
+ip netns exec "$NS" "$PY" scripts/demo_master.py ecat-master --seconds "$SECONDS_LIVE"
 kill -INT "$SLAVE"; wait "$SLAVE" || true
 echo "== rackcat said:"
 sed 's/^/   /' "$STATE/rackcat.log" | tail -n 20

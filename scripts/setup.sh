@@ -1,44 +1,90 @@
 #!/usr/bin/env bash
-# Installs everything rackcat needs to build, run and test, from Debian's packages and PyPI
-# (and crates.io, through cargo, for the ethercrab interop program). Idempotent: a second run
-# installs nothing and finishes in a few seconds.
+# Installs what rackcat needs, from Debian's packages and PyPI. Two profiles:
+#
+#   scripts/setup.sh --demo   what scripts/demo.sh needs: the compiler, CMake, the libraries the
+#                             CLI links, iproute2, and pysoem in the project's virtual environment
+#   scripts/setup.sh          everything the tests need on top (scripts/test.sh): clang and its
+#                             tools, GoogleTest/Benchmark, tshark, QEMU with a kernel image and
+#                             busybox for the CAN VM test, pytest
+#
+# Python packages go into a virtual environment in the checkout (.venv, created with Debian's
+# python3-venv), never into the system interpreter. Every script runs Python through
+# scripts/python.sh, which picks that environment. Other helpers add PyPI packages to
+# PY_TEST_PACKAGES (or PY_DEMO_PACKAGES) below, nowhere else.
+#
+# Idempotent: a second run installs nothing and finishes in a few seconds. It says what it
+# installs; apt's and pip's own progress is shown.
 set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
 
-DEB_PACKAGES=(
+PROFILE=test
+case "${1:-}" in
+  --demo) PROFILE=demo ;;
+  "" | --test) ;;
+  *) echo "usage: scripts/setup.sh [--demo|--test]" >&2; exit 2 ;;
+esac
+
+# Building the CLI and running the demo (scripts/demo.sh).
+DEB_DEMO=(
   build-essential cmake ninja-build pkg-config git
-  clang clang-format clang-tidy libclang-rt-14-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
   libeigen3-dev libpugixml-dev libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev
   nlohmann-json3-dev libcpp-httplib-dev libssl-dev zlib1g-dev
-  iproute2 tshark libxml2-utils python3 python3-pip python3-venv
+  iproute2 python3 python3-venv
+)
+# The tests on top (scripts/test.sh): sanitizer/fuzz builds, tidy, unit tests, capture checks,
+# the CAN VM test.
+DEB_TEST=(
+  clang clang-format clang-tidy libclang-rt-14-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  tshark libxml2-utils
   qemu-system-x86 linux-image-amd64 busybox-static
 )
-PY_PACKAGES=(pysoem pytest)
+PY_DEMO_PACKAGES=(pysoem)
+PY_TEST_PACKAGES=(pytest)
+
+deb=("${DEB_DEMO[@]}")
+py=("${PY_DEMO_PACKAGES[@]}")
+if [ "$PROFILE" = test ]; then
+  deb+=("${DEB_TEST[@]}")
+  py+=("${PY_TEST_PACKAGES[@]}")
+fi
 
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 missing=()
-for p in "${DEB_PACKAGES[@]}"; do
+for p in "${deb[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -gt 0 ]; then
-  echo "setup: installing Debian packages: ${missing[*]}"
+  echo "setup: installing ${#missing[@]} Debian package(s): ${missing[*]}"
   export DEBIAN_FRONTEND=noninteractive
   echo "wireshark-common wireshark-common/install-setuid boolean false" | $SUDO debconf-set-selections || true
-  $SUDO apt-get update -qq
-  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  echo "setup: apt-get update"
+  $SUDO apt-get update -q
+  $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+else
+  echo "setup: Debian packages ($PROFILE profile) already installed"
 fi
 
-# Python test packages: into the interpreter that runs the tests (python3 on PATH).
-PY=${PYTHON:-python3}
+# The project's virtual environment. PYTHON selects the interpreter that creates it.
+VENV=$ROOT/.venv
+if [ ! -x "$VENV/bin/python" ]; then
+  echo "setup: creating the Python virtual environment $VENV"
+  "${PYTHON:-python3}" -m venv "$VENV"
+fi
 need_py=()
-for p in "${PY_PACKAGES[@]}"; do
-  "$PY" -c "import $p" 2>/dev/null || need_py+=("$p")
+for p in "${py[@]}"; do
+  "$VENV/bin/python" -c "import $p" 2>/dev/null || need_py+=("$p")
 done
 if [ ${#need_py[@]} -gt 0 ]; then
-  echo "setup: installing Python packages: ${need_py[*]}"
-  "$PY" -m pip install -q --disable-pip-version-check "${need_py[@]}" 2>/dev/null \
-    || "$PY" -m pip install -q --disable-pip-version-check --break-system-packages "${need_py[@]}"
+  echo "setup: installing Python package(s) into .venv: ${need_py[*]}"
+  "$VENV/bin/python" -m pip install --disable-pip-version-check --progress-bar off "${need_py[@]}"
 fi
-echo "setup: ok"
+# The master developers' package (python/rackcat_line), editable, when present.
+if [ "$PROFILE" = test ] && [ -f "$ROOT/python/pyproject.toml" ] &&
+  ! "$VENV/bin/python" -c "import rackcat_line" 2>/dev/null; then
+  echo "setup: installing python/ (rackcat_line) into .venv"
+  "$VENV/bin/python" -m pip install --disable-pip-version-check --progress-bar off -e "$ROOT/python"
+fi
+echo "setup: ok ($PROFILE profile)"

@@ -29,6 +29,7 @@ BUILD=${RACKCAT_BUILD_DIR:-build}
 [ -x "$BUILD/rackcat" ] || { cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null;
                              cmake --build "$BUILD" --target rackcat -j "$(nproc)" >/dev/null; }
 . scripts/netns.sh
+. scripts/python.sh
 NS=rackcat-soak-$$
 STATE=$(mktemp -d)
 cleanup() { netns_down "$NS"; rm -rf "$STATE"; }
@@ -45,7 +46,7 @@ ip netns exec "$NS" "${RT[@]}" "$BUILD/rackcat" run --iface ecat-slave --slaves 
 SLAVE=$!
 sleep 0.5
 rc=0
-ip netns exec "$NS" python3 scripts/soak.py ecat-master --pid "$SLAVE" \
+ip netns exec "$NS" "$PY" scripts/soak.py ecat-master --pid "$SLAVE" \
   --minutes "$MINUTES" --slaves "$SLAVES" || rc=$?
 kill -INT "$SLAVE" 2>/dev/null || true
 wait "$SLAVE" 2>/dev/null || true

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Sets up and runs every test of rackcat: the README's test command, and what CI runs.
 #
-#   1. scripts/setup.sh (Debian + PyPI packages, idempotent)
+#   1. scripts/setup.sh (Debian packages + PyPI packages into .venv, idempotent)
 #   2. release build (gcc) -> GoogleTest suite under ctest, then clang-tidy over the library
 #      and app sources (scripts/tidy.sh: any finding fails)
 #   3. wire interop against real masters over veth pairs in private network namespaces:
@@ -11,60 +11,91 @@
 #      again, then every fuzz target for a bounded time on its seed corpus
 #   5. a short bounded soak run (scripts/soak.sh), when present
 #
+# Every step runs even when an earlier one failed; the end is a summary of each step's result
+# and time, and the exit status is non-zero when any step failed. Works from any checkout path
+# (spaces included). Each step's output is also kept in build-logs/STEP.log.
+#
 # Environment: JOBS (default: nproc), FUZZ_SECONDS (default 60 per target), SKIP_ASAN=1,
 # SKIP_FUZZ=1, SKIP_INTEROP=1 for quicker local runs.
-set -euo pipefail
+set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
 JOBS=${JOBS:-$(nproc)}
 FUZZ_SECONDS=${FUZZ_SECONDS:-60}
+LOGS=$ROOT/build-logs
+mkdir -p "$LOGS"
 
-step() { printf '\n==== %s ====\n' "$*"; }
-started=$(date +%s)
+names=()
+results=()
+times=()
+failed=0
+# step NAME FUNCTION: runs FUNCTION in a subshell with errexit, records result and time.
+step() {
+  local name=$1 fn=$2 t0 rc log
+  log=$LOGS/$(tr -c 'A-Za-z0-9_-' '_' <<<"$name" | sed 's/_*$//').log
+  printf '\n==== %s ====\n' "$name"
+  t0=$(date +%s)
+  ( set -euo pipefail; "$fn" ) 2>&1 | tee "$log"
+  rc=${PIPESTATUS[0]}
+  names+=("$name")
+  times+=($(( $(date +%s) - t0 )))
+  if [ "$rc" -eq 0 ]; then results+=("pass"); else results+=("FAIL ($rc)"); failed=1; fi
+}
 
-step "setup"
-bash scripts/setup.sh
-
-step "release build"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$JOBS"
-
-step "unit tests (release)"
-ctest --test-dir build --output-on-failure -j "$JOBS" --timeout 300
-
-step "clang-tidy (library and app sources)"
-bash scripts/tidy.sh build
-
-if [ "${SKIP_INTEROP:-0}" != 1 ]; then
-  step "interop: pysoem over veth"
-  rc=0
-  python3 -m pytest -q tests/interop -p no:cacheprovider || rc=$?
-  # pytest exits 5 when it collected no test at all: that is a failure here.
-  if [ "$rc" -ne 0 ]; then echo "pytest failed with exit code $rc"; exit 1; fi
-  if [ -f scripts/ethercrab_interop.sh ]; then
-    step "interop: ethercrab over veth"
-    bash scripts/ethercrab_interop.sh
-  fi
-fi
-
-if [ "${SKIP_ASAN:-0}" != 1 ]; then
-  step "sanitizer build (clang, ASan+UBSan, libFuzzer targets)"
+do_setup() { bash scripts/setup.sh; }
+do_build() {
+  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DRACKCAT_TESTS=ON -DRACKCAT_BENCH=ON \
+    >/dev/null
+  cmake --build build -j "$JOBS"
+}
+do_unit() { ctest --test-dir build --output-on-failure -j "$JOBS" --timeout 300; }
+do_tidy() { bash scripts/tidy.sh build; }
+do_pysoem() {
+  . scripts/python.sh
+  # pytest exits 5 when it collected no test at all: that is a failure here too.
+  "$PY" -m pytest -q tests/interop -p no:cacheprovider
+}
+do_ethercrab() { bash scripts/ethercrab_interop.sh; }
+do_asan_build() {
   CC=clang CXX=clang++ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DRACKCAT_SANITIZE=ON -DRACKCAT_FUZZ=ON -DRACKCAT_BENCH=OFF >/dev/null
   cmake --build build-asan -j "$JOBS"
-  step "unit tests (ASan+UBSan)"
+}
+do_asan_unit() {
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure -j "$JOBS" --timeout 600
+}
+do_fuzz() { bash scripts/fuzz.sh --build-dir build-asan --seconds "$FUZZ_SECONDS"; }
+do_soak() { bash scripts/soak.sh --minutes 1; }
+
+started=$(date +%s)
+step "setup" do_setup
+step "release build" do_build
+step "unit tests (release)" do_unit
+step "clang-tidy" do_tidy
+if [ "${SKIP_INTEROP:-0}" != 1 ]; then
+  step "interop: pysoem over veth" do_pysoem
+  [ -f scripts/ethercrab_interop.sh ] && step "interop: ethercrab over veth" do_ethercrab
+fi
+if [ "${SKIP_ASAN:-0}" != 1 ]; then
+  step "sanitizer build" do_asan_build
+  step "unit tests (ASan+UBSan)" do_asan_unit
   if [ "${SKIP_FUZZ:-0}" != 1 ] && [ -x scripts/fuzz.sh ]; then
-    step "fuzz (${FUZZ_SECONDS}s per target)"
-    bash scripts/fuzz.sh --build-dir build-asan --seconds "$FUZZ_SECONDS"
+    step "fuzz (${FUZZ_SECONDS}s per target)" do_fuzz
   fi
 fi
-
 if [ -f scripts/soak.sh ] && [ "${SKIP_INTEROP:-0}" != 1 ]; then
-  step "soak (bounded)"
-  bash scripts/soak.sh --minutes 1
+  step "soak (bounded)" do_soak
 fi
 
 echo
-echo "all tests passed in $(( $(date +%s) - started )) s"
+echo "==== summary ===="
+for i in "${!names[@]}"; do
+  printf '  %-34s %-10s %5d s\n' "${names[i]}" "${results[i]}" "${times[i]}"
+done
+total=$(( $(date +%s) - started ))
+if [ "$failed" -ne 0 ]; then
+  echo "some steps FAILED (total ${total} s); their output is in build-logs/"
+  exit 1
+fi
+echo "all steps passed in ${total} s"

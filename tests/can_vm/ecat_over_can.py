@@ -34,6 +34,7 @@ import signal
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -179,7 +180,9 @@ def main():
         result("FAIL", stage="setup", cmd="_".join(e.cmd[:4]),
                error=e.stderr.decode(errors="replace").strip().replace(" ", "_")[:80])
 
-    state_dir = Path("/tmp/rackcat-ecat-over-can")
+    # TMPDIR: in the VM, /tmp is the host's (read-only, so a checkout below /tmp stays
+    # visible) and TMPDIR names a tmpfs.
+    state_dir = Path(tempfile.gettempdir()) / "rackcat-ecat-over-can"
     state_dir.mkdir(parents=True, exist_ok=True)
     slave = spawn(rackcat, "run", "--iface", SLAVE_IF, "--config", RACK, "--rim-bus",
                   f"can:{CAN}", "--no-pty", "--control-port", CONTROL_PORT, "--state-dir",

@@ -7,6 +7,7 @@ cd "$(dirname "$0")/../.."
 BUILD=${1:-build}
 [ "$(id -u)" -eq 0 ] || { echo "interop_mdp: needs root (network namespace, raw socket)" >&2; exit 2; }
 . scripts/netns.sh
+. scripts/python.sh
 NS=rackcat-mdp-$$
 STATE=$(mktemp -d)
 SLAVE=
@@ -23,11 +24,11 @@ stop() { kill -INT "$SLAVE"; wait "$SLAVE" || true; SLAVE=; }
 rc=0
 echo "== phase 1: read the dictionary, write 0x2000:04 and store"
 start
-ip netns exec "$NS" python3 tests/mdp/interop_mdp.py mdp-master store 10.20.30.40 || rc=1
+ip netns exec "$NS" "$PY" tests/mdp/interop_mdp.py mdp-master store 10.20.30.40 || rc=1
 stop
 echo "== phase 2: after a restart"
 start
-ip netns exec "$NS" python3 tests/mdp/interop_mdp.py mdp-master check 10.20.30.40 || rc=1
+ip netns exec "$NS" "$PY" tests/mdp/interop_mdp.py mdp-master check 10.20.30.40 || rc=1
 stop
 [ $rc -eq 0 ] || { echo "== rackcat log:"; tail -n 30 "$STATE/rackcat.log"; }
 exit $rc

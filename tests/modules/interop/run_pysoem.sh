@@ -8,6 +8,7 @@ root=$(cd "$here/../../.." && pwd)
 build=${1:-$root/build}
 rackcat=$build/rackcat
 source "$root/scripts/netns.sh"
+source "$root/scripts/python.sh"
 ns=rackcat-modules-$$
 state=$(mktemp -d)
 log=$state/run.log
@@ -17,4 +18,4 @@ netns_up "$ns" rcm0 rcm1
 ip netns exec "$ns" "$rackcat" run --iface rcm0 --control-port 18767 --state-dir "$state" >"$log" 2>&1 &
 for _ in $(seq 50); do grep -q "control API on" "$log" && break; sleep 0.1; done
 pty=$(grep "channel 0:" "$log" | head -1 | awk '{print $NF}')
-ip netns exec "$ns" python3 "$here/check_modules.py" rcm1 "$pty" "$rackcat" 18767
+ip netns exec "$ns" "$PY" "$here/check_modules.py" rcm1 "$pty" "$rackcat" 18767
