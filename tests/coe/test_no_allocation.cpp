@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <new>
 
+#include "coe/diagnosis_history.hpp"
 #include "coe/process_image.hpp"
 #include "tests/coe/sdo_fixture.hpp"
 
@@ -104,6 +105,31 @@ TEST_F(SdoTest, CyclicPathMakesNoHeapAllocation) {
   }
   EXPECT_EQ(g_allocations.load() - before, 0);
   EXPECT_EQ(od.find(0x7000)->get_u(2), 0x5Au);
+}
+
+// ETG.1020 diagnosis history: adding messages (wrap-around, both modes, filtered ones) and the
+// SDO hooks' reads and acknowledgements run on the cyclic path without allocating.
+TEST(DiagnosisHistoryAllocation, AddAndAcknowledgeMakeNoHeapAllocation) {
+  ObjectDictionary dict;
+  diag::History history(8);
+  dict.add(history.make_object());
+  history.bind(*dict.find(diag::kIndex));
+  diag::Message m;
+  m.diag_code = diag::emergency_diag_code(0x5000);
+  m.type = diag::Type::Warning;
+  m.add_u8(1);
+  m.add_u16(2);
+  const long before = g_allocations.load();
+  for (int i = 0; i < 1000; ++i) {
+    m.time_ns = static_cast<uint64_t>(i);
+    history.add(m);
+    history.on_read(history.newest_subindex());
+    if (i % 100 == 50) history.write_newest_acknowledged(history.newest_subindex());
+    if (i == 500) history.write_flags(diag::kFlagAcknowledgeMode);
+    if (i % 100 == 99) history.write_newest_acknowledged(0);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_GT(history.count(), 0u);
 }
 
 }  // namespace
