@@ -7,6 +7,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -16,6 +17,7 @@
 #include "coe/process_image.hpp"
 #include "coe/sdo_server.hpp"
 #include "mdp/command_bytes.hpp"
+#include "mdp/diagnosis_catalogue.hpp"
 #include "mdp/object_dictionary_builder.hpp"
 #include "mdp/parameter_set.hpp"
 #include "mdp/parameter_store.hpp"
@@ -80,6 +82,8 @@ struct Device::Impl {
   std::chrono::steady_clock::time_point power_on = std::chrono::steady_clock::now();
   int64_t clock_offset_s = 0;  // clock written to 0x2000:08 minus the system clock
   uint64_t last_sync_ns = 0;
+  std::chrono::steady_clock::time_point last_sync_at{};
+  coe::diag::History history{kDiagnosisMessages};
   // A command executed in validate_write, applied to its object in after_write.
   struct PendingCommand {
     uint8_t status = 0;
@@ -121,6 +125,7 @@ struct Device::Impl {
 
   void power_on_reset() {
     od.for_each([](Object& o) { o.load_defaults(); });
+    history.bind(*od.find(coe::diag::kIndex));
     clock_offset_s = 0;
     load_stored();
     image->compile();
@@ -202,6 +207,29 @@ struct Device::Impl {
   }
 
   void install_hooks();
+
+  // One diagnosis message and, when stored with 0x10F3:05 bit 0, its Emergency.
+  coe::diag::AddResult emit(uint16_t text_id, uint16_t code, uint8_t reg,
+                            const std::array<uint8_t, 5>& data, uint8_t rim, uint16_t module,
+                            uint8_t channel, uint16_t detail, bool& queued) {
+    coe::diag::Message m;
+    m.diag_code = coe::diag::emergency_diag_code(code);
+    m.type = diag::type_of(text_id);
+    m.text_id = text_id;
+    m.time_ns = self->diagnosis_time(m.local_time);
+    m.add_u8(rim);
+    m.add_u16(module);
+    m.add_u8(channel);
+    m.add_u16(detail);
+    const auto r = history.add(m);
+    queued = true;
+    if (r == coe::diag::AddResult::Stored && history.emergency_enabled()) {
+      const size_t before = sdo->emergency_overruns();
+      sdo->queue_emergency(code, reg, data);
+      queued = sdo->emergency_overruns() == before;
+    }
+    return r;
+  }
 };
 
 void Device::Impl::install_hooks() {
@@ -371,6 +399,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.writer = std::make_unique<ParameterWriter>(*d.store);
   d.image = std::make_unique<coe::ProcessImage>(d.od);
   d.install_hooks();
+  d.history.bind(*d.od.find(coe::diag::kIndex));
   if (options.load_stored_parameters) {
     d.load_stored();
   } else {
@@ -405,9 +434,43 @@ size_t Device::poll_mailbox(std::span<uint8_t> reply) {
 
 bool Device::raise_emergency(uint16_t error_code, uint8_t error_register,
                              std::array<uint8_t, 5> data) {
-  const size_t before = impl_->sdo->emergency_overruns();
-  impl_->sdo->queue_emergency(error_code, error_register, data);
-  return impl_->sdo->emergency_overruns() == before;
+  const uint16_t text = diag::text_for_emergency(error_code, data);
+  const uint16_t mask = static_cast<uint16_t>(data[3] | (data[4] << 8));
+  const auto channel = static_cast<uint8_t>(mask ? std::countr_zero(mask) : 0xFF);
+  const uint16_t detail = text == diag::text::kEmergency ? error_code : 0;
+  bool queued = true;
+  impl_->emit(text, error_code, error_register, data, data[0], data[1], channel, detail, queued);
+  return queued;
+}
+
+coe::diag::AddResult Device::report_diagnosis(const DiagnosisReport& r) {
+  const diag::DiagText* t = diag::find(r.text_id);
+  const uint16_t code = t ? t->emergency_code : 0;
+  const uint8_t reg = t ? t->error_register : 0;
+  const uint16_t mask = r.channel < 16 ? static_cast<uint16_t>(1u << r.channel) : 0;
+  const std::array<uint8_t, 5> data = {r.rim, static_cast<uint8_t>(r.module), 0xFF,
+                                       static_cast<uint8_t>(mask), static_cast<uint8_t>(mask >> 8)};
+  bool queued = true;
+  return impl_->emit(r.text_id, code, reg, data, r.rim, r.module, r.channel, r.detail, queued);
+}
+
+const coe::diag::History& Device::diagnosis() const {
+  return impl_->history;
+}
+
+uint64_t Device::diagnosis_time(bool& local) const {
+  const Impl& d = *impl_;
+  const auto now = std::chrono::steady_clock::now();
+  const auto since_sync = now - d.last_sync_at;
+  if (d.last_sync_ns != 0 && since_sync < std::chrono::seconds(1)) {
+    local = false;
+    return d.last_sync_ns +
+           static_cast<uint64_t>(
+               std::chrono::duration_cast<std::chrono::nanoseconds>(since_sync).count());
+  }
+  local = true;
+  return static_cast<uint64_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(now - d.power_on).count());
 }
 
 uint16_t Device::request_state(EsmState from, EsmState to) {
@@ -460,7 +523,10 @@ void Device::read_inputs(std::span<uint8_t> sm3) {
 
 void Device::sync_event(int which, uint64_t system_time_ns) {
   Impl& d = *impl_;
-  if (which == 0) d.last_sync_ns = system_time_ns;
+  if (which == 0) {
+    d.last_sync_ns = system_time_ns;
+    d.last_sync_at = std::chrono::steady_clock::now();
+  }
   d.notify([&](CycleListener& l) { l.on_sync(*this, which, system_time_ns); });
 }
 

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "coe/access.hpp"
+#include "coe/diagnosis_history.hpp"
 #include "coe/object_dictionary.hpp"
 #include "mdp/rack_config.hpp"
 
@@ -92,9 +93,29 @@ class Device {
   // Unsolicited messages (CoE Emergency) when SM1 is free; 0 when nothing is pending.
   size_t poll_mailbox(std::span<uint8_t> reply);
   // Queue a CoE Emergency (ETG.1000.6 §5.6.4): error code (CiA-style, e.g. 0x4210), error
-  // register (0x1001 style bits) and 5 manufacturer bytes. False when the queue is full.
+  // register (0x1001 style bits) and 5 manufacturer bytes ([0] RIM, [1] module, [2] event bit,
+  // [3..4] channel mask). It is a diagnosis message like report_diagnosis() (text ID from
+  // diag::text_for_emergency): stored in 0x10F3 unless filtered, and sent only when stored
+  // and 0x10F3:05 bit 0 is set, so the Emergencies and the history never disagree (ETG.1020
+  // ch. 13). Device thread. False when the Emergency queue is full.
   bool raise_emergency(uint16_t error_code, uint8_t error_register,
                        std::array<uint8_t, 5> data = {});
+
+  // --- Diagnosis history 0x10F3 (ETG.1020 ch. 13, mdp/diagnosis_catalogue.hpp). Device thread,
+  // no allocation. The message takes its type, Emergency code and register from the catalogue
+  // entry of `text_id`, its time stamp from diagnosis_time().
+  struct DiagnosisReport {
+    uint16_t text_id = 0;
+    uint8_t rim = 0;         // 0 = control module
+    uint16_t module = 0;     // 0 = none
+    uint8_t channel = 0xFF;  // 0-based, 0xFF = none
+    uint16_t detail = 0;
+  };
+  coe::diag::AddResult report_diagnosis(const DiagnosisReport& report);
+  const coe::diag::History& diagnosis() const;
+  // The DC system time (ns since 2000-01-01) extrapolated from the last SYNC0 while SYNC0 runs
+  // (an event within the last second); otherwise ns since power-on and `local` = true.
+  uint64_t diagnosis_time(bool& local) const;
 
   // --- ESM (ETG.1000.6 §5.3). request_state returns 0 to accept or an AL status code:
   // 0x0070 when PREOP->SAFEOP finds the configured module list 0xF030 different from the

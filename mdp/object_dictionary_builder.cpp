@@ -12,6 +12,7 @@ void build_object_dictionary(const RackConfig& config, coe::ObjectDictionary& od
   add_exception_objects(config, od);
   add_cdp_objects(config, od);
   add_command_objects(config, od);
+  add_diagnosis_objects(config, od);
 }
 
 }  // namespace rackcat::mdp

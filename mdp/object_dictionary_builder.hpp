@@ -29,6 +29,12 @@ void add_mdp_objects(const RackConfig& config, coe::ObjectDictionary& od);      
 void add_exception_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0xF380-0xF3A8
 void add_cdp_objects(const RackConfig& config, coe::ObjectDictionary& od);        // 0xF6F0-0xF9F8
 void add_command_objects(const RackConfig& config, coe::ObjectDictionary& od);    // 0xFBF0-0xFBF4
+void add_diagnosis_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0x10F3, 0x1BFF
+
+// 0x10F3 diagnosis history size (ETG.1020 ch. 13 allows 1..250) and the device-level TxPDO
+// that maps 0x10F3:04 "New Messages Available".
+inline constexpr uint8_t kDiagnosisMessages = 64;
+inline constexpr uint16_t kDiagnosisTxPdo = 0x1BFF;
 
 // 0x1C32/0x1C33:01 synchronisation types (ETG.1020 §8.2.2, ETG.1000.6 Table 67).
 inline constexpr uint16_t kSyncFreeRun = 0x00;
