@@ -1,5 +1,5 @@
 // `rackcat ctl [--port P] <command>`: the client of a running rack's fault-injection control
-// API (modules/control_api.hpp, HTTP + JSON on 127.0.0.1). Prints the answer (JSON, or a
+// API (modules/control/control_api.hpp, HTTP + JSON on 127.0.0.1). Prints the answer (JSON, or a
 // table for `list`); an invalid request prints the API's reason and exits 2, an unreachable
 // rack exits 1.
 #include <httplib.h>
@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "apps/commands.hpp"
-#include "modules/control_api.hpp"
+#include "modules/control/control_api.hpp"
 
 namespace rackcat::apps {
 namespace {

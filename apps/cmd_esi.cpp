@@ -6,7 +6,7 @@
 #include <string>
 
 #include "apps/commands.hpp"
-#include "apps/rack_loading.hpp"
+#include "apps/rack_slave/rack_loading.hpp"
 #include "esi/rack.hpp"
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"

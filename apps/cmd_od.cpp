@@ -10,7 +10,7 @@
 #include <string>
 
 #include "apps/commands.hpp"
-#include "apps/rack_loading.hpp"
+#include "apps/rack_slave/rack_loading.hpp"
 #include "coe/data_type.hpp"
 #include "coe/object_dictionary.hpp"
 #include "mdp/device.hpp"

@@ -18,10 +18,10 @@
 
 #include "apps/commands.hpp"
 #include "mdp/rack_config.hpp"
-#include "modules/canopen_rim_master.hpp"
-#include "modules/canopen_rim_node.hpp"
-#include "modules/canopen_rim_sources.hpp"
-#include "modules/canopen_socketcan.hpp"
+#include "modules/canopen/socketcan.hpp"
+#include "modules/rim/master.hpp"
+#include "modules/rim/node.hpp"
+#include "modules/rim/sources.hpp"
 
 namespace rackcat::apps {
 namespace {

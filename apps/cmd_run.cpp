@@ -14,14 +14,14 @@
 #include <vector>
 
 #include "apps/commands.hpp"
-#include "apps/rack_loading.hpp"
-#include "apps/rack_slave.hpp"
+#include "apps/rack_slave/rack_loading.hpp"
+#include "apps/rack_slave/rack_slave.hpp"
 #include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
 #include "mdp/rack_config.hpp"
-#include "modules/canopen_socketcan.hpp"
-#include "modules/canopen_threaded_link.hpp"
-#include "modules/control_api.hpp"
+#include "modules/canopen/socketcan.hpp"
+#include "modules/control/control_api.hpp"
+#include "modules/rim/threaded_link.hpp"
 
 namespace rackcat::apps {
 namespace {

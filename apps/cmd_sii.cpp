@@ -8,7 +8,7 @@
 #include <string>
 
 #include "apps/commands.hpp"
-#include "apps/rack_loading.hpp"
+#include "apps/rack_slave/rack_loading.hpp"
 #include "esi/rack.hpp"
 #include "esi/sii_parser.hpp"
 #include "mdp/device.hpp"

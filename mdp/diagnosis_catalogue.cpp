@@ -93,7 +93,7 @@ constexpr bool sorted_by_id() {
 }
 static_assert(sorted_by_id(), "catalogue in text ID order");
 
-// RIM event bits (guide Table 16, modules/events.hpp rim_event) to their text.
+// RIM event bits (guide Table 16, modules/rack/events.hpp rim_event) to their text.
 uint16_t rim_bit_text(unsigned bit) {
   switch (bit) {
     case 2:

@@ -99,7 +99,7 @@ uint16_t channel_error_text(ChannelError e);
 std::span<const DiagText> catalogue();
 const DiagText* find(uint16_t text_id);
 
-// The text ID for an Emergency raised by the rack (modules/events.hpp codes and data bytes):
+// The text ID for an Emergency raised by the rack (modules/rack/events.hpp codes and data bytes):
 // the exception tree's causes by event bit, channel faults by code, removals by what they name.
 uint16_t text_for_emergency(uint16_t code, std::span<const uint8_t, 5> data);
 

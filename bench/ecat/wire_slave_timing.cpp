@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "apps/rack_loading.hpp"
-#include "apps/rack_slave.hpp"
+#include "apps/rack_slave/rack_loading.hpp"
+#include "apps/rack_slave/rack_slave.hpp"
 #include "ecat/host/raw_socket_link.hpp"
 #include "ecat/segment.hpp"
 

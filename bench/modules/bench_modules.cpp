@@ -8,10 +8,10 @@
 
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"
-#include "modules/analog_scale.hpp"
-#include "modules/rack.hpp"
-#include "modules/rtd.hpp"
-#include "modules/thermocouple.hpp"
+#include "modules/cards/analog_scale.hpp"
+#include "modules/cards/rtd.hpp"
+#include "modules/cards/thermocouple.hpp"
+#include "modules/rack/rack.hpp"
 
 using namespace rackcat;
 using namespace rackcat::modules;

@@ -17,8 +17,8 @@
 
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"
-#include "modules/control_api.hpp"
-#include "modules/rack.hpp"
+#include "modules/control/control_api.hpp"
+#include "modules/rack/rack.hpp"
 
 namespace {
 

@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "mdp/rack_config.hpp"
-#include "modules/canopen_rim_master.hpp"
-#include "modules/canopen_socketcan.hpp"
+#include "modules/canopen/socketcan.hpp"
+#include "modules/rim/master.hpp"
 
 using namespace rackcat;
 using namespace rackcat::modules;

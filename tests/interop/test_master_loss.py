@@ -3,7 +3,7 @@ veth pair with pysoem.
 
 A master that stops sending in OP: the SM2 (process-data) watchdog expires, the device goes to
 SAFEOP with the error flag and AL status code 0x001B, and every output takes its safe state
-(de-energised by default, modules/safe_state.hpp), within the watchdog time plus one cycle, in
+(de-energised by default, modules/cards/safe_state.hpp), within the watchdog time plus one cycle, in
 every one of many trials. A master that restarts half way (INIT requested in OP, or a master
 that vanished and a new one running config_init) gets the device to OP again without
 restarting rackcat.

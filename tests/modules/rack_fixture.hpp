@@ -11,7 +11,7 @@
 
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"
-#include "modules/rack.hpp"
+#include "modules/rack/rack.hpp"
 
 namespace rackcat::modules::testing {
 

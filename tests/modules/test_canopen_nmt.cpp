@@ -2,9 +2,9 @@
 // Tables 52/53) and the heartbeat consumer, on the deterministic virtual bus.
 #include <gtest/gtest.h>
 
-#include "modules/canopen_nmt.hpp"
-#include "modules/canopen_socketcan.hpp"
-#include "modules/canopen_virtual_bus.hpp"
+#include "modules/canopen/nmt.hpp"
+#include "modules/canopen/socketcan.hpp"
+#include "modules/canopen/virtual_bus.hpp"
 
 using namespace rackcat::modules::canopen;
 

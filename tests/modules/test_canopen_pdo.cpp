@@ -6,10 +6,10 @@
 #include "coe/bits.hpp"
 #include "mdp/card_catalogue.hpp"
 #include "mdp/rack_config.hpp"
-#include "modules/canopen_rim_master.hpp"
-#include "modules/canopen_rim_node.hpp"
-#include "modules/canopen_rim_sources.hpp"
-#include "modules/canopen_virtual_bus.hpp"
+#include "modules/canopen/virtual_bus.hpp"
+#include "modules/rim/master.hpp"
+#include "modules/rim/node.hpp"
+#include "modules/rim/sources.hpp"
 
 using namespace rackcat;
 using namespace rackcat::modules;

@@ -4,12 +4,12 @@
 // test's clock.
 #include <gtest/gtest.h>
 
-#include "modules/canopen_emcy.hpp"
-#include "modules/canopen_rack_link.hpp"
-#include "modules/canopen_rim_master.hpp"
-#include "modules/canopen_rim_node.hpp"
-#include "modules/canopen_threaded_link.hpp"
-#include "modules/canopen_virtual_bus.hpp"
+#include "modules/canopen/emcy.hpp"
+#include "modules/canopen/virtual_bus.hpp"
+#include "modules/rim/master.hpp"
+#include "modules/rim/node.hpp"
+#include "modules/rim/rack_link.hpp"
+#include "modules/rim/threaded_link.hpp"
 #include "rack_fixture.hpp"
 
 using namespace rackcat;

@@ -5,9 +5,9 @@
 
 #include "coe/bits.hpp"
 #include "mdp/rack_config.hpp"
-#include "modules/canopen_rim_node.hpp"
-#include "modules/canopen_sdo_client.hpp"
-#include "modules/canopen_virtual_bus.hpp"
+#include "modules/canopen/sdo_client.hpp"
+#include "modules/canopen/virtual_bus.hpp"
+#include "modules/rim/node.hpp"
 
 using namespace rackcat;
 using namespace rackcat::modules::canopen;

@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "modules/control_api.hpp"
+#include "modules/control/control_api.hpp"
 #include "rack_fixture.hpp"
 
 using namespace rackcat;

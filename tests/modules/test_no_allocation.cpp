@@ -5,7 +5,7 @@
 #include <fstream>
 #include <new>
 
-#include "modules/analog_scale.hpp"
+#include "modules/cards/analog_scale.hpp"
 #include "rack_fixture.hpp"
 
 namespace {

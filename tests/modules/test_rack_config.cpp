@@ -6,7 +6,7 @@
 
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"
-#include "modules/rack.hpp"
+#include "modules/rack/rack.hpp"
 #include "rack_fixture.hpp"
 
 using namespace rackcat;

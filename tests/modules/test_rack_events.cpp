@@ -1,7 +1,7 @@
 // RIM state machine, fans, CPU temperature, wiring faults and their propagation through the
 // exception tree (guide §3, Tables 14-20), Detect Modules Override (Table 23) and the CoE
 // Emergencies that announce them.
-#include "modules/events.hpp"
+#include "modules/rack/events.hpp"
 #include "rack_fixture.hpp"
 
 using namespace rackcat;

@@ -1,7 +1,7 @@
 // Drivers behind a real mdp::Device: process data in and out, loopbacks, oversampling,
 // temperatures, power-on rule and safe states.
-#include "modules/analog_scale.hpp"
-#include "modules/temperature_scale.hpp"
+#include "modules/cards/analog_scale.hpp"
+#include "modules/cards/temperature_scale.hpp"
 #include "rack_fixture.hpp"
 
 using namespace rackcat;

@@ -1,7 +1,7 @@
 // Pt100 Callendar-Van Dusen against the IEC 60751 reference table (ohms at °C).
 #include <gtest/gtest.h>
 
-#include "modules/rtd.hpp"
+#include "modules/cards/rtd.hpp"
 
 using namespace rackcat::modules;
 

@@ -2,9 +2,9 @@
 // configured value and current output, on every channel position.
 #include <gtest/gtest.h>
 
-#include "modules/analog_scale.hpp"
-#include "modules/events.hpp"
-#include "modules/safe_state.hpp"
+#include "modules/cards/analog_scale.hpp"
+#include "modules/cards/safe_state.hpp"
+#include "modules/rack/events.hpp"
 
 using namespace rackcat::modules;
 

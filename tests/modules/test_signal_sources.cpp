@@ -6,8 +6,8 @@
 #include <fstream>
 #include <numbers>
 
-#include "modules/signal_source.hpp"
-#include "modules/state_space_plant.hpp"
+#include "modules/signals/signal_source.hpp"
+#include "modules/signals/state_space_plant.hpp"
 
 using namespace rackcat::modules;
 

@@ -3,10 +3,10 @@
 
 #include <ctime>
 
-#include "modules/analog_scale.hpp"
-#include "modules/signal_source.hpp"
-#include "modules/source_factory.hpp"
-#include "modules/state_space_plant.hpp"
+#include "modules/cards/analog_scale.hpp"
+#include "modules/signals/signal_source.hpp"
+#include "modules/signals/source_factory.hpp"
+#include "modules/signals/state_space_plant.hpp"
 
 using namespace rackcat::modules;
 

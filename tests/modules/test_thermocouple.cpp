@@ -2,8 +2,8 @@
 // (NIST Monograph 175 / srdata.nist.gov/its90: EMF in mV tabulated to 1 µV).
 #include <gtest/gtest.h>
 
-#include "modules/temperature_scale.hpp"
-#include "modules/thermocouple.hpp"
+#include "modules/cards/temperature_scale.hpp"
+#include "modules/cards/thermocouple.hpp"
 
 using namespace rackcat::modules;
 

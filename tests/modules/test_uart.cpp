@@ -8,7 +8,7 @@
 #include <chrono>
 #include <thread>
 
-#include "modules/uart_driver.hpp"
+#include "modules/cards/uart_driver.hpp"
 #include "rack_fixture.hpp"
 
 using namespace rackcat;

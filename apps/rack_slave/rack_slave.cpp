@@ -1,0 +1,79 @@
+#include "apps/rack_slave/rack_slave.hpp"
+
+#include <utility>
+
+#include "esi/rack.hpp"
+
+namespace rackcat::apps {
+namespace {
+// AL states and CoE ESM states share their encoding (ETG.1000.6 Table 9).
+coe::EsmState esm(ecat::AlState s) {
+  return static_cast<coe::EsmState>(s);
+}
+
+mdp::RackConfig for_position(mdp::RackConfig config, int position) {
+  config.control.serial += static_cast<uint32_t>(position);
+  return config;
+}
+}  // namespace
+
+RackSlave::RackSlave(mdp::RackConfig config, const std::string& state_dir, int position) {
+  mdp::DeviceOptions options;
+  options.state_dir = position == 0 ? state_dir : state_dir + "/slave-" + std::to_string(position);
+  device_ = std::make_unique<mdp::Device>(for_position(std::move(config), position), options);
+  rack_ = std::make_unique<modules::Rack>(*device_);
+  device_->add_listener(&reset_listener_);
+  sii_ = esi::build_sii(*device_).bytes;
+}
+
+RackSlave::~RackSlave() {
+  device_->remove_listener(&reset_listener_);
+  rack_->stop_control_api();
+  rack_.reset();  // detaches from the device before the device goes
+}
+
+uint16_t RackSlave::on_state_request(ecat::AlState from, ecat::AlState to) {
+  if (const uint16_t code = device_->request_state(esm(from), esm(to))) return code;
+  return rack_->check_state_request(esm(from), esm(to));
+}
+
+void RackSlave::on_state_changed(ecat::AlState from, ecat::AlState to) {
+  device_->state_changed(esm(from), esm(to));
+}
+
+ecat::ProcessDataSizes RackSlave::process_data_sizes() const {
+  return {device_->output_bytes(), device_->input_bytes()};
+}
+
+size_t RackSlave::on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
+  return device_->handle_mailbox(request, reply);
+}
+
+size_t RackSlave::poll_mailbox(std::span<uint8_t> reply) {
+  // SM1 is free: the master has read the answer to the reset command, so the restart no
+  // longer swallows it.
+  if (restart_pending_) {
+    restart_pending_ = false;
+    if (restart_) restart_();
+    return 0;
+  }
+  return device_->poll_mailbox(reply);
+}
+
+void RackSlave::update_inputs(std::span<uint8_t> inputs) {
+  device_->read_inputs(inputs);
+}
+
+void RackSlave::on_outputs(std::span<const uint8_t> outputs) {
+  device_->write_outputs(outputs);
+}
+
+void RackSlave::on_sync(int which, uint64_t system_time_ns) {
+  device_->sync_event(which, system_time_ns);
+}
+
+void RackSlave::on_watchdog_expired() {
+  device_->watchdog_expired();
+}
+
+}  // namespace rackcat::apps

@@ -1,0 +1,62 @@
+// One emulated rack behind one emulated ESC: adapts the Fusion.IO-style device (mdp::Device,
+// with its slot-card drivers, modules::Rack) to the ESC's application interface
+// (ecat::Application). This is the only place where the ESC side and the device side meet;
+// neither knows the other.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "ecat/application.hpp"
+#include "mdp/device.hpp"
+#include "mdp/rack_config.hpp"
+#include "modules/rack/rack.hpp"
+
+namespace rackcat::apps {
+
+class RackSlave final : public ecat::Application {
+ public:
+  // `position` (0-based) distinguishes the slaves of a segment: it is added to the serial
+  // number (0x1018:04, SII word 0x0E) and names the slave's own state directory.
+  RackSlave(mdp::RackConfig config, const std::string& state_dir, int position);
+  ~RackSlave() override;
+
+  mdp::Device& device() { return *device_; }
+  // Called (on the ESC's thread) when the device reset command 0xFBF0 has been answered and
+  // the master has read the answer: the owner restarts the ESC's application side
+  // (ecat::Esc::application_restart).
+  void set_restart_handler(std::function<void()> fn) { restart_ = std::move(fn); }
+  modules::Rack& rack() { return *rack_; }
+
+  std::span<const uint8_t> eeprom() const override { return sii_; }
+  uint16_t on_state_request(ecat::AlState from, ecat::AlState to) override;
+  void on_state_changed(ecat::AlState from, ecat::AlState to) override;
+  ecat::ProcessDataSizes process_data_sizes() const override;
+  size_t on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) override;
+  size_t poll_mailbox(std::span<uint8_t> reply) override;
+  void update_inputs(std::span<uint8_t> inputs) override;
+  void on_outputs(std::span<const uint8_t> outputs) override;
+  void on_sync(int which, uint64_t system_time_ns) override;
+  void on_watchdog_expired() override;
+
+ private:
+  std::unique_ptr<mdp::Device> device_;
+  std::unique_ptr<modules::Rack> rack_;  // the slot cards; a CycleListener of device_
+  std::vector<uint8_t> sii_;
+  std::function<void()> restart_;
+  bool restart_pending_ = false;
+
+  // Hears the device reset command (0xFBF0) among the device's listeners.
+  struct ResetListener final : mdp::CycleListener {
+    explicit ResetListener(RackSlave& s) : slave(s) {}
+    void on_device_reset(mdp::Device&, bool /*factory*/) override { slave.restart_pending_ = true; }
+    RackSlave& slave;
+  };
+  ResetListener reset_listener_{*this};
+};
+
+}  // namespace rackcat::apps

@@ -1,0 +1,87 @@
+#include "modules/cards/card_driver.hpp"
+
+#include "modules/cards/drivers.hpp"
+
+namespace rackcat::modules {
+
+CardDriver::CardDriver(const mdp::Module& module, coe::ObjectDictionary& od, size_t inputs,
+                       size_t outputs)
+    : module_(module), od_(od), inputs_(inputs), outputs_(outputs) {
+  for (auto& in : inputs_) in.source = std::make_unique<ConstantSource>(0.0);
+}
+
+coe::Object* CardDriver::object(uint16_t area_base, uint8_t nibble) {
+  return od_.find(module_.index(area_base, nibble));
+}
+
+void CardDriver::drive(size_t i, double value, uint32_t code) {
+  OutputChannel& o = outputs_[i];
+  o.driven = value;
+  o.code = code;
+  switch (o.fault) {
+    case WiringFault::None:
+      o.wire = value;
+      break;
+    case WiringFault::ShortToGround:
+      o.wire = 0.0;
+      break;
+    case WiringFault::ShortToSupply:
+      o.wire = 1.0;
+      break;
+  }
+}
+
+void CardDriver::set_wiring_fault(size_t i, WiringFault fault) {
+  outputs_[i].fault = fault;
+  drive(i, outputs_[i].driven, outputs_[i].code);
+}
+
+void CardDriver::de_energise() {
+  for (size_t i = 0; i < outputs_.size(); ++i) drive(i, 0.0, 0);
+}
+
+uint32_t CardDriver::safe_wiring_faults() const {
+  uint32_t bits = 0;
+  for (size_t i = 0; i < outputs_.size(); ++i) {
+    if (outputs_[i].driven >= 0.5 && outputs_[i].wire < 0.5) bits |= 1u << i;
+  }
+  return bits;
+}
+
+uint32_t CardDriver::unsafe_wiring_faults() const {
+  uint32_t bits = 0;
+  for (size_t i = 0; i < outputs_.size(); ++i) {
+    if (outputs_[i].driven < 0.5 && outputs_[i].wire >= 0.5) bits |= 1u << i;
+  }
+  return bits;
+}
+
+std::unique_ptr<CardDriver> make_driver(const mdp::Module& module, coe::ObjectDictionary& od) {
+  using mdp::Signal;
+  switch (module.card->signal) {
+    case Signal::DigitalIn:
+    case Signal::DigitalInInverted:
+      return make_digital_input_driver(module, od);
+    case Signal::DigitalOutSource:
+    case Signal::DigitalOutSink:
+    case Signal::DigitalOutOpto:
+    case Signal::Relay:
+    case Signal::RelayForceGuided:
+      return make_digital_output_driver(module, od);
+    case Signal::DigitalInOut:
+      return make_dio_driver(module, od);
+    case Signal::AnalogIn:
+      return make_analog_input_driver(module, od);
+    case Signal::AnalogOut:
+      return make_analog_output_driver(module, od);
+    case Signal::Thermocouple:
+      return make_thermocouple_driver(module, od);
+    case Signal::Rtd:
+      return make_rtd_driver(module, od);
+    case Signal::Uart:
+      return make_uart_driver(module, od);
+  }
+  return nullptr;
+}
+
+}  // namespace rackcat::modules

@@ -1,0 +1,107 @@
+// Slot-card drivers: one per card kind of the catalogue (mdp/card_catalogue.hpp). A driver owns
+// the physical side of one EtherCAT module: the input channels with their signal sources and
+// the output channels with the values on the terminals. Each cycle the rack calls
+//   read_outputs()   in OP after the master's output data was unpacked into 0x7nnX,
+//   write_inputs()   before the 0x6nnX objects are packed into the input data,
+// and on leaving OP apply_safe_state() (0x4nn0..0x4nn3). None of them allocates.
+//
+// Output channel values are physical and stable in memory, so sources elsewhere can read
+// them (loopback, plant inputs): digital 0/1, analog volts.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "coe/object_dictionary.hpp"
+#include "mdp/rack_config.hpp"
+#include "modules/signals/signal_source.hpp"
+
+namespace rackcat::modules {
+
+// Wiring faults of sourcing safety outputs (guide §4.7).
+enum class WiringFault : uint8_t {
+  None,
+  ShortToGround,  // the wire reads 0 whatever is driven: driven high -> safe wiring fault
+  ShortToSupply,  // the wire reads 1 whatever is driven: driven low -> unsafe wiring fault
+};
+
+struct InputChannel {
+  std::unique_ptr<Source> source;  // never null
+  double value = 0.0;              // last sample (V, °C or 0/1)
+  uint32_t code = 0;               // last code written to the process data
+  bool open = false;               // thermocouple / RTD sensor break (fault injection)
+  double loop_ohms = 10.0;         // thermocouple loop resistance reported in 0x5nn4
+};
+
+struct OutputChannel {
+  double commanded = 0.0;  // last valid output data from the master (physical)
+  double driven = 0.0;     // what the card drives now (power-on rule, safe state, RIM loss)
+  double wire = 0.0;       // the level on the terminal: driven, unless a wiring fault
+  uint32_t code = 0;       // process-data code of `driven`
+  WiringFault fault = WiringFault::None;
+};
+
+class CardDriver {
+ public:
+  CardDriver(const mdp::Module& module, coe::ObjectDictionary& od, size_t inputs, size_t outputs);
+  virtual ~CardDriver() = default;
+  CardDriver(const CardDriver&) = delete;
+  CardDriver& operator=(const CardDriver&) = delete;
+
+  const mdp::Module& module() const { return module_; }
+  const mdp::CardType& card() const { return *module_.card; }
+  std::span<InputChannel> inputs() { return inputs_; }
+  std::span<const InputChannel> inputs() const { return inputs_; }
+  std::span<OutputChannel> outputs() { return outputs_; }
+  std::span<const OutputChannel> outputs() const { return outputs_; }
+
+  // OP, valid output data: take the 0x7nnX values and drive them.
+  virtual void read_outputs() {}
+  // Sample the sources at t (seconds since start); dt is the time since the previous call
+  // (oversampled cards spread their samples over it). Writes 0x6nnX (and 0x5nn4, 0x5nn6...).
+  virtual void write_inputs(double t, double dt) = 0;
+  // Leaving OP: drive the 0x4nnX substitute values.
+  virtual void apply_safe_state() {}
+  // Drive every output to 0 (power-on before the first valid data, RIM offline: the RIM
+  // drives its outputs to the TÜV-safe de-energised level).
+  void de_energise();
+  // The RIM is offline: its input process data reads 0.
+  virtual void clear_inputs() = 0;
+
+  // Physical units for `rackcat ctl list`.
+  virtual const char* input_unit() const { return ""; }
+  virtual const char* output_unit() const { return ""; }
+  // Which faults can be injected.
+  virtual bool detects_wiring_faults() const { return false; }
+  virtual bool has_sensor_break() const { return false; }
+
+  // Fault injection: a wiring fault on output i (the wire level follows at once).
+  void set_wiring_fault(size_t i, WiringFault fault);
+  // Card parameters from the rack file / control API (thermocouple: "cold_junction_c").
+  // False when the card has no such parameter.
+  virtual bool set_parameter(std::string_view /*key*/, double /*value*/) { return false; }
+
+  // Wiring-fault details for 0xF382:n (safe) and 0xF384:n (unsafe): bit n = channel n.
+  uint32_t safe_wiring_faults() const;
+  uint32_t unsafe_wiring_faults() const;
+
+ protected:
+  coe::Object* object(uint16_t area_base, uint8_t nibble);
+  // Update driven value, wire level and code of output i.
+  void drive(size_t i, double value, uint32_t code);
+
+  const mdp::Module& module_;
+  coe::ObjectDictionary& od_;
+  std::vector<InputChannel> inputs_;
+  std::vector<OutputChannel> outputs_;
+};
+
+// The driver for a module's card (by the catalogue's Signal); every input starts with a
+// constant 0 source.
+std::unique_ptr<CardDriver> make_driver(const mdp::Module& module, coe::ObjectDictionary& od);
+
+}  // namespace rackcat::modules

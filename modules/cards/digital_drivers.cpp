@@ -1,0 +1,250 @@
+// Digital slot cards: inputs (guide Table 3 0x9000/0xC000/0xD000, Table 5 DINx8 and the x8
+// oversampled idents), outputs (0x3000/0x5000/0x7000/0xA000/0xB000/0xE000) and the E84 DIO
+// card (0x4000). Process-data objects per Appendix A: 0x6nn0/1/5/6/B/C, 0x7nn0/1/B; safe
+// states 0x4nn0 (16 channels, UINT) and 0x4nn1 (8 or 4 channels, USINT), guide Tables 7-8.
+#include <fmt/format.h>
+#include <bit>
+#include <cstring>
+#include <stdexcept>
+
+#include "modules/cards/drivers.hpp"
+#include "modules/cards/entry_slot.hpp"
+#include "modules/cards/safe_state.hpp"
+
+namespace rackcat::modules {
+
+coe::Object& require_object(coe::ObjectDictionary& od, uint16_t index, const mdp::Module& m) {
+  coe::Object* o = od.find(index);
+  if (o == nullptr) {
+    throw std::runtime_error(
+        fmt::format("module {} ({} in RIM {} slot {}): object 0x{:04X} missing", m.number,
+                    m.card->name, m.rim, m.slot, index));
+  }
+  return *o;
+}
+
+float read_real32(const coe::Object& o, uint8_t subindex) {
+  return std::bit_cast<float>(static_cast<uint32_t>(o.get_u(subindex)));
+}
+
+namespace {
+
+bool level(double v) {
+  return v >= 0.5;
+}
+
+// Digital inputs, 4/8/16 channels, once or eight times per cycle.
+class DigitalInputDriver final : public CardDriver {
+ public:
+  DigitalInputDriver(const mdp::Module& m, coe::ObjectDictionary& od)
+      : CardDriver(m, od, m.card->channels, 0),
+        obj_(require_object(od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)),
+        inverted_(m.card->signal == mdp::Signal::DigitalInInverted),
+        samples_(m.card->samples),
+        word_(obj_, 1) {
+    if (samples_ > 1) {
+      raw_ = obj_.bytes(1);
+      sample_bytes_ = card().channels > 8 ? 2 : 1;
+      if (raw_.size() < static_cast<size_t>(samples_) * sample_bytes_)
+        throw std::runtime_error(fmt::format("module {}: sample array too small", m.number));
+    }
+  }
+
+  void write_inputs(double t, double dt) override {
+    if (samples_ == 1) {
+      const uint32_t word = sample_word(t);
+      inputs_code(word);
+      word_.set(word);
+      return;
+    }
+    // Sample k of 0..7 at t - dt + (k+1) dt/8: sample 0 is the oldest, 7 is taken now.
+    // Channels whose sources cannot change within a cycle are sampled once.
+    bool varies = false;
+    for (const auto& in : inputs_) varies |= in.source->varies_within_cycle();
+    uint32_t word = 0;
+    for (unsigned k = 0; k < samples_; ++k) {
+      const double ts = t - dt + (k + 1) * dt / samples_;
+      if (varies || k == 0) word = sample_word(varies ? ts : t);
+      raw_[k * sample_bytes_] = static_cast<uint8_t>(word);
+      if (sample_bytes_ == 2) raw_[k * sample_bytes_ + 1] = static_cast<uint8_t>(word >> 8);
+      if (k + 1 == samples_) inputs_code(word);
+    }
+  }
+
+  void clear_inputs() override {
+    if (samples_ == 1) {
+      obj_.set_u(1, 0);
+    } else {
+      std::memset(raw_.data(), 0, raw_.size());
+    }
+    for (auto& in : inputs_) in.code = 0;
+  }
+
+  const char* input_unit() const override { return "bit"; }
+
+ private:
+  uint32_t sample_word(double t) {
+    uint32_t word = 0;
+    for (size_t i = 0; i < inputs_.size(); ++i) {
+      InputChannel& in = inputs_[i];
+      in.value = in.source->sample(t);
+      // Inverted cards report a low input as 1 (guide Table 3 0x9000).
+      if (level(in.value) != inverted_) word |= 1u << i;
+    }
+    return word;
+  }
+  void inputs_code(uint32_t word) {
+    for (size_t i = 0; i < inputs_.size(); ++i) inputs_[i].code = (word >> i) & 1u;
+  }
+
+  coe::Object& obj_;
+  bool inverted_;
+  unsigned samples_;
+  EntrySlot word_;  // DINx16 / DINx8 (DINx4 is a BIT4: set_u fallback)
+  std::span<uint8_t> raw_;
+  unsigned sample_bytes_ = 1;
+};
+
+// Reads the digital output word of 0x7nnX and applies 0x4nn0/0x4nn1 on leaving OP.
+class DigitalOutputs {
+ public:
+  DigitalOutputs(coe::ObjectDictionary& od, const mdp::Module& m)
+      : out_(require_object(od, m.index(0x7000, static_cast<uint8_t>(*m.card->output)), m)),
+        safe_(
+            m.card->safe_state
+                ? &require_object(od, m.index(0x4000, static_cast<uint8_t>(*m.card->safe_state)), m)
+                : nullptr),
+        channels_(m.card->channels),
+        mask_(channels_ >= 32 ? 0xFFFFFFFFu : (1u << channels_) - 1u) {}
+
+  uint32_t commanded() const { return static_cast<uint32_t>(out_.get_u(1)) & mask_; }
+  uint32_t safe_word(uint32_t current) const {
+    if (safe_ == nullptr) return 0;
+    return digital_safe_state(current, static_cast<uint32_t>(safe_->get_u(1)),
+                              static_cast<uint32_t>(safe_->get_u(2)),
+                              static_cast<uint32_t>(safe_->get_u(3)), channels_) &
+           mask_;
+  }
+  unsigned channels() const { return channels_; }
+
+ private:
+  coe::Object& out_;
+  coe::Object* safe_;
+  unsigned channels_;
+  uint32_t mask_;
+};
+
+uint32_t driven_word(std::span<const OutputChannel> outs) {
+  uint32_t w = 0;
+  for (size_t i = 0; i < outs.size(); ++i) w |= (level(outs[i].driven) ? 1u : 0u) << i;
+  return w;
+}
+uint32_t wire_word(std::span<const OutputChannel> outs) {
+  uint32_t w = 0;
+  for (size_t i = 0; i < outs.size(); ++i) w |= (level(outs[i].wire) ? 1u : 0u) << i;
+  return w;
+}
+
+class DigitalOutputDriver final : public CardDriver {
+ public:
+  DigitalOutputDriver(const mdp::Module& m, coe::ObjectDictionary& od)
+      : CardDriver(m, od, 0, m.card->channels),
+        dout_(od, m),
+        feedback_(m.card->input ? &require_object(
+                                      od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)
+                                : nullptr),
+        sourcing_(m.card->signal == mdp::Signal::DigitalOutSource) {}
+
+  void read_outputs() override {
+    const uint32_t word = dout_.commanded();
+    for (size_t i = 0; i < outputs_.size(); ++i) outputs_[i].commanded = (word >> i) & 1u;
+    drive_word(word);
+  }
+  void apply_safe_state() override { drive_word(dout_.safe_word(driven_word(outputs_))); }
+
+  void write_inputs(double, double) override {
+    // Force-guided relays report their feedback contacts: the contact state follows the
+    // wire (a welded contact shows up as a mismatch against the command).
+    if (feedback_ != nullptr) feedback_->set_u(1, wire_word(outputs_));
+  }
+  void clear_inputs() override {
+    if (feedback_ != nullptr) feedback_->set_u(1, 0);
+  }
+  const char* output_unit() const override { return "bit"; }
+  bool detects_wiring_faults() const override { return sourcing_; }
+
+ private:
+  void drive_word(uint32_t word) {
+    for (size_t i = 0; i < outputs_.size(); ++i) {
+      const uint32_t bit = (word >> i) & 1u;
+      drive(i, bit, bit);
+    }
+  }
+
+  DigitalOutputs dout_;
+  coe::Object* feedback_;
+  bool sourcing_;
+};
+
+// E84 (guide Table 3 0x4000): 8 inputs and 8 outputs; DIOx8 subindex 1 carries the inputs,
+// subindex 2 the read-back of the outputs as sensed on the terminals.
+class DioDriver final : public CardDriver {
+ public:
+  DioDriver(const mdp::Module& m, coe::ObjectDictionary& od)
+      : CardDriver(m, od, m.card->channels, m.card->channels),
+        dout_(od, m),
+        in_(require_object(od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)) {}
+
+  void read_outputs() override {
+    const uint32_t word = dout_.commanded();
+    for (size_t i = 0; i < outputs_.size(); ++i) outputs_[i].commanded = (word >> i) & 1u;
+    drive_word(word);
+  }
+  void apply_safe_state() override { drive_word(dout_.safe_word(driven_word(outputs_))); }
+
+  void write_inputs(double t, double) override {
+    uint32_t word = 0;
+    for (size_t i = 0; i < inputs_.size(); ++i) {
+      InputChannel& in = inputs_[i];
+      in.value = in.source->sample(t);
+      in.code = level(in.value) ? 1u : 0u;
+      word |= in.code << i;
+    }
+    in_.set_u(1, word);
+    in_.set_u(2, wire_word(outputs_));
+  }
+  void clear_inputs() override {
+    in_.set_u(1, 0);
+    in_.set_u(2, 0);
+    for (auto& in : inputs_) in.code = 0;
+  }
+  const char* input_unit() const override { return "bit"; }
+  const char* output_unit() const override { return "bit"; }
+
+ private:
+  void drive_word(uint32_t word) {
+    for (size_t i = 0; i < outputs_.size(); ++i) {
+      const uint32_t bit = (word >> i) & 1u;
+      drive(i, bit, bit);
+    }
+  }
+
+  DigitalOutputs dout_;
+  coe::Object& in_;
+};
+
+}  // namespace
+
+std::unique_ptr<CardDriver> make_digital_input_driver(const mdp::Module& m,
+                                                      coe::ObjectDictionary& od) {
+  return std::make_unique<DigitalInputDriver>(m, od);
+}
+std::unique_ptr<CardDriver> make_digital_output_driver(const mdp::Module& m,
+                                                       coe::ObjectDictionary& od) {
+  return std::make_unique<DigitalOutputDriver>(m, od);
+}
+std::unique_ptr<CardDriver> make_dio_driver(const mdp::Module& m, coe::ObjectDictionary& od) {
+  return std::make_unique<DioDriver>(m, od);
+}
+
+}  // namespace rackcat::modules

@@ -1,0 +1,608 @@
+#include "modules/rack/rack.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+#include "mdp/sync_manager_layout.hpp"
+#include "modules/cards/uart_driver.hpp"
+#include "modules/control/control_api.hpp"
+#include "modules/signals/state_space_plant.hpp"
+
+namespace rackcat::modules {
+namespace {
+
+double steady_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+void set_real(coe::Object* o, uint8_t sub, double v) {
+  if (o != nullptr && o->entry(sub) != nullptr)
+    o->set_u(sub, std::bit_cast<uint32_t>(static_cast<float>(v)));
+}
+
+bool parse_u8(std::string_view s, uint8_t& out) {
+  unsigned v = 0;
+  if (s.empty() || s.size() > 3) return false;
+  for (char c : s) {
+    if (c < '0' || c > '9') return false;
+    v = v * 10 + static_cast<unsigned>(c - '0');
+  }
+  if (v > 255) return false;
+  out = static_cast<uint8_t>(v);
+  return true;
+}
+
+}  // namespace
+
+Rack::Rack(mdp::Device& device, RackOptions options)
+    : device_(device),
+      options_(std::move(options)),
+      // ExceptionTree is the MDP exception tree (the guide's diagnosis objects), not a C++
+      // exception: bugprone-throw-keyword-missing goes by the type's name alone.
+      // NOLINTNEXTLINE(bugprone-throw-keyword-missing)
+      tree_(device.dictionary(), device.modules().size(),
+            EmergencySink{[this](uint16_t code, uint8_t reg, const uint8_t (&data)[5]) {
+              device_.raise_emergency(code, reg, {data[0], data[1], data[2], data[3], data[4]});
+            }}),
+      cpu_fan_rpm_(options_.fan_nominal_rpm),
+      cpu_temp_(options_.cpu_temperature_c) {
+  if (!options_.clock) {
+    const double start = steady_seconds();
+    options_.clock = [start] { return steady_seconds() - start; };
+  }
+  if (!(options_.cycle_time_s > 0.0)) throw std::invalid_argument("cycle time must be > 0");
+  const mdp::RackConfig& cfg = device_.config();
+  coe::ObjectDictionary& od = device_.dictionary();
+
+  for (const mdp::Rim& r : cfg.rims) {
+    RimStatus s;
+    s.number = r.number;
+    s.power_supply_fan = r.power_supply_fan;
+    s.slot_card_fan = r.slot_card_fan;
+    s.power_supply_rpm = r.power_supply_fan ? options_.fan_nominal_rpm : 0.0;
+    s.slot_card_rpm = r.slot_card_fan ? options_.fan_nominal_rpm : 0.0;
+    rims_[r.number] = s;
+  }
+  const auto modules = device_.modules();
+  drivers_.resize(modules.size());
+  module_rim_.resize(modules.size());
+  last_safe_.assign(modules.size(), 0);
+  last_unsafe_.assign(modules.size(), 0);
+  for (const mdp::Module& m : modules) {
+    drivers_[m.number - 1] = make_driver(m, od);
+    module_rim_[m.number - 1] = m.rim;
+    rims_[m.rim].modules.push_back(m.number);
+    if (auto* u = dynamic_cast<UartDriver*>(drivers_[m.number - 1].get())) uarts_.push_back(u);
+  }
+
+  // Channel sources and card options of the rack file (after every driver exists, so
+  // loopbacks can point anywhere).
+  for (const mdp::Module& m : modules) {
+    const mdp::SlotCard& sc = cfg.slot_card(m);
+    CardDriver& d = *drivers_[m.number - 1];
+    for (const auto& [key, value] : sc.options) {
+      if (key == "oversampling") continue;  // selects the catalogue variant (mdp)
+      char* end = nullptr;
+      const double v = std::strtod(value.c_str(), &end);
+      if (end == value.c_str() || *end != '\0' || !d.set_parameter(key, v)) {
+        throw mdp::ConfigError(cfg.source, sc.line,
+                               fmt::format("slot {}: card {} has no option '{}' (or '{}' is not "
+                                           "a number)",
+                                           sc.slot, m.card->name, key, value));
+      }
+    }
+    for (const mdp::ChannelOptions& ch : sc.channels) {
+      try {
+        SourceParams params = ch.params;
+        // A replay file is relative to the rack file's directory.
+        if (auto f = params.find("file"); f != params.end() && !f->second.empty() &&
+                                          f->second.front() != '/' &&
+                                          std::filesystem::exists(cfg.source)) {
+          f->second =
+              (std::filesystem::path(cfg.source).parent_path() / f->second).lexically_normal();
+        }
+        if (ch.loopback) {
+          params["rim"] = std::to_string(ch.loopback->rim);
+          params["slot"] = std::to_string(ch.loopback->slot);
+          params["channel"] = std::to_string(ch.loopback->channel);
+        }
+        if (!ch.source.empty()) {
+          set_source(m.number, ch.channel, ch.source, params);
+        } else {
+          if (ch.channel >= d.inputs().size())
+            throw std::invalid_argument(
+                fmt::format("{} has {} input channels", m.card->name, d.inputs().size()));
+          for (const auto& [k, v] : params) {
+            if (!is_channel_option_key(k))
+              throw std::invalid_argument(fmt::format("unknown channel option '{}'", k));
+          }
+          set_source(m.number, ch.channel, "constant", params);
+        }
+      } catch (const std::invalid_argument& e) {
+        throw mdp::ConfigError(
+            cfg.source, ch.line,
+            fmt::format("RIM {} slot {} channel {}: {}", m.rim, m.slot, ch.channel, e.what()));
+      } catch (const std::runtime_error& e) {
+        if (dynamic_cast<const mdp::ConfigError*>(&e)) throw;
+        throw mdp::ConfigError(
+            cfg.source, ch.line,
+            fmt::format("RIM {} slot {} channel {}: {}", m.rim, m.slot, ch.channel, e.what()));
+      }
+    }
+  }
+
+  t0_ = last_t_ = plant_t_ = now();
+  publish_fans();
+  publish_cpu_temperature();
+  evaluate_faults();
+  tree_.update();
+  dirty_ = false;
+  device_.add_listener(this);
+}
+
+Rack::~Rack() {
+  device_.remove_listener(this);
+  stop_control_api();
+  for (UartDriver* u : uarts_) u->stop_ptys();
+}
+
+double Rack::now() const {
+  return options_.clock();
+}
+
+CardDriver* Rack::driver(uint16_t module_number) {
+  if (module_number == 0 || module_number > drivers_.size()) return nullptr;
+  return drivers_[module_number - 1].get();
+}
+
+CardDriver* Rack::driver_at(uint8_t rim, uint8_t slot) {
+  const mdp::Module* m = device_.config().module_at(rim, slot);
+  return m ? driver(m->number) : nullptr;
+}
+
+bool Rack::rim_online(uint8_t rim) const {
+  auto it = rims_.find(rim);
+  return it != rims_.end() && it->second.state == RimState::Online;
+}
+
+void Rack::start_uart_ptys() {
+  for (UartDriver* u : uarts_) {
+    u->start_ptys();
+    for (size_t c = 0; c < 4; ++c) {
+      spdlog::info("UART module {} (RIM {} slot {}) channel {}: {}", u->module().number,
+                   u->module().rim, u->module().slot, c, u->channel(c).path);
+    }
+  }
+}
+
+uint16_t Rack::start_control_api(uint16_t port, PostFn post) {
+  stop_control_api();
+  api_ = std::make_unique<ControlApi>(*this, std::move(post));
+  return api_->listen(port);
+}
+
+void Rack::stop_control_api() {
+  if (api_) api_->stop();
+  api_.reset();
+}
+
+// ---- cyclic path ---------------------------------------------------------------------------
+
+void Rack::on_outputs(mdp::Device&) {
+  // Outputs are driven only in OP; the first OP data after start (or after leaving OP) is the
+  // first valid output data (power-on rule).
+  if (state_ != coe::EsmState::Op) return;
+  for (size_t i = 0; i < drivers_.size(); ++i) {
+    if (rim_online(module_rim_[i])) drivers_[i]->read_outputs();
+  }
+  outputs_valid_ = true;
+}
+
+void Rack::before_inputs(mdp::Device&) {
+  const double t = now();
+  double dt = t - last_t_;
+  if (!(dt > 0.0) || dt > 1.0) dt = options_.cycle_time_s;
+  last_t_ = t;
+  if (!plants_.empty()) {
+    int steps = 0;
+    while (plant_t_ + options_.cycle_time_s <= t) {
+      for (auto& [name, p] : plants_) p->step();
+      plant_t_ += options_.cycle_time_s;
+      if (++steps >= 10000) {  // far behind (debugger, suspend): resynchronise
+        plant_t_ = t;
+        break;
+      }
+    }
+  }
+  for (size_t i = 0; i < drivers_.size(); ++i) {
+    if (rim_online(module_rim_[i])) drivers_[i]->write_inputs(t - t0_, dt);
+  }
+  evaluate_faults();
+  if (t >= cpu_next_publish_) publish_cpu_temperature();
+  if (dirty_) {
+    tree_.update();
+    dirty_ = false;
+  }
+}
+
+void Rack::evaluate_faults() {
+  bool unsafe_in_rim[6] = {};
+  for (size_t i = 0; i < drivers_.size(); ++i) {
+    CardDriver& d = *drivers_[i];
+    if (!d.detects_wiring_faults()) continue;
+    const uint32_t safe = d.safe_wiring_faults();
+    const uint32_t unsafe = d.unsafe_wiring_faults();
+    if (unsafe) unsafe_in_rim[module_rim_[i]] = true;
+    if (safe != last_safe_[i] || unsafe != last_unsafe_[i]) {
+      last_safe_[i] = safe;
+      last_unsafe_[i] = unsafe;
+      tree_.set_module_faults(static_cast<uint16_t>(i + 1), safe, unsafe);
+      dirty_ = true;
+    }
+  }
+  // An unsafe wiring fault takes its RIM out of ONLINE (guide Table 23): the RIM drives its
+  // outputs to the TÜV-safe level; it returns when the fault is gone.
+  for (auto& [rr, rim] : rims_) {
+    if (unsafe_in_rim[rr] && rim.state == RimState::Online) {
+      set_rim_state(rr, RimState::Error, rim.comm_error);
+    } else if (!unsafe_in_rim[rr] && rim.state == RimState::Error) {
+      set_rim_state(rr, RimState::Online, false);
+    }
+  }
+}
+
+void Rack::on_state_changed(mdp::Device&, coe::EsmState from, coe::EsmState to) {
+  state_ = to;
+  if (from == coe::EsmState::Op && to != coe::EsmState::Op) {
+    apply_safe_states();
+    outputs_valid_ = false;
+  }
+}
+
+void Rack::apply_safe_states() {
+  for (size_t i = 0; i < drivers_.size(); ++i) {
+    if (rim_online(module_rim_[i])) drivers_[i]->apply_safe_state();
+  }
+  dirty_ = true;
+}
+
+void Rack::on_watchdog_expired(mdp::Device&) {
+  if (state_ == coe::EsmState::Op) apply_safe_states();
+  outputs_valid_ = false;
+  device_.raise_emergency(emcy::kPdTimeout, emcy::kRegGeneric | emcy::kRegCommunication, {});
+}
+
+void Rack::on_exception_reset(mdp::Device&) {
+  tree_.reset_latched();
+  dirty_ = false;
+}
+
+void Rack::on_detect_modules(mdp::Device& device) {
+  // Guide Table 23: with Detect Modules Override 0 the command enumerates only the cards it
+  // detects now, so the cards of a RIM that is not online leave 0xF050 (mdp filled it with
+  // the whole rack; ETG.5001.1: the detected list holds the modules present, in order).
+  coe::Object* detected = device.dictionary().find(0xF050);
+  if (detected != nullptr && !detect_modules_override()) {
+    uint8_t n = 0;
+    for (const mdp::Module& m : device.config().modules) {
+      if (rim_online(m.rim)) detected->set_u(++n, m.card->module_ident);
+    }
+    for (uint8_t k = n + 1; k <= detected->sub0(); ++k) detected->set_u(k, 0);
+    detected->image()[0] = n;
+  }
+  refresh();
+}
+
+void Rack::on_device_reset(mdp::Device&, bool) {
+  // 0xFBF0 emulates a power cycle: outputs undriven until new valid data, latched exceptions
+  // gone (the physical causes - unplugged RIMs, faults, fans - stay as they are).
+  for (size_t i = 0; i < drivers_.size(); ++i) drivers_[i]->de_energise();
+  outputs_valid_ = false;
+  publish_cpu_temperature();
+  tree_.reset_latched();
+  dirty_ = false;
+}
+
+void Rack::on_parameters_loaded(mdp::Device&) {
+  for (UartDriver* u : uarts_) u->reload_config();
+  refresh();
+}
+
+// ---- state and fault injection ------------------------------------------------------------
+
+uint16_t Rack::check_state_request(coe::EsmState from, coe::EsmState to) const {
+  if (to != coe::EsmState::Op || from == coe::EsmState::Op) return 0;
+  if (detect_modules_override()) return 0;
+  for (const auto& [rr, rim] : rims_) {
+    if (rim.state != RimState::Online && rim_has_mapped_process_data(rr))
+      return kAlStatusModuleMissing;
+  }
+  return 0;
+}
+
+bool Rack::detect_modules_override() const {
+  const coe::Object* o = device_.dictionary().find(0x2000);
+  if (o == nullptr || o->entry(0x0B) == nullptr) return device_.config().detect_modules_override;
+  return o->get_u(0x0B) != 0;
+}
+
+bool Rack::rim_has_mapped_process_data(uint8_t rim) const {
+  const coe::ObjectDictionary& od = device_.dictionary();
+  struct Assign {
+    uint16_t index, base;
+  };
+  for (const Assign a :
+       {Assign{0x1C12, mdp::sm::kRxPdoBase}, Assign{0x1C13, mdp::sm::kTxPdoBase}}) {
+    const coe::Object* o = od.find(a.index);
+    if (o == nullptr) continue;
+    for (uint8_t k = 1; k <= o->sub0(); ++k) {
+      const auto pdo = static_cast<uint16_t>(o->get_u(k));
+      if (pdo < a.base) continue;
+      const size_t module = static_cast<size_t>(pdo - a.base) / mdp::sm::kPdoIndexIncrement + 1;
+      if (module <= module_rim_.size() && module_rim_[module - 1] == rim) return true;
+    }
+  }
+  return false;
+}
+
+void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
+  auto it = rims_.find(rr);
+  if (it == rims_.end()) throw std::invalid_argument(fmt::format("there is no RIM {}", rr));
+  RimStatus& rim = it->second;
+  const RimState prev = rim.state;
+  rim.state = state;
+  rim.comm_error = comm_error;
+  tree_.set_rim_state(rr, state, comm_error);
+  for (uint16_t n : rim.modules) {
+    CardDriver& d = *drivers_[n - 1];
+    if (state != RimState::Online) {
+      // The RIM drives its outputs to the TÜV-safe level; its inputs are gone.
+      d.de_energise();
+      d.clear_inputs();
+    } else if (prev != RimState::Online && state_ == coe::EsmState::Op && outputs_valid_) {
+      d.read_outputs();
+    }
+  }
+  tree_.update();
+  dirty_ = false;
+  if (prev == RimState::Online && state != RimState::Online && state_ == coe::EsmState::Op &&
+      !detect_modules_override() && rim_has_mapped_process_data(rr) && state_request_) {
+    // Guide Table 23, Detect Modules Override 0: OP -> SAFEOP, outputs to their safe states.
+    state_request_(coe::EsmState::SafeOp, kAlStatusModuleMissing);
+  }
+}
+
+void Rack::set_fan_rpm(uint8_t rr, std::string_view zone, double rpm) {
+  if (!std::isfinite(rpm) || rpm < 0.0 || rpm > 100000.0)
+    throw std::invalid_argument("rpm must be 0..100000");
+  if (rr == 0) {
+    if (!zone.empty() && zone != "cpu")
+      throw std::invalid_argument("the control module has only the 'cpu' fan zone");
+    cpu_fan_rpm_ = rpm;
+  } else {
+    auto it = rims_.find(rr);
+    if (it == rims_.end()) throw std::invalid_argument(fmt::format("there is no RIM {}", rr));
+    RimStatus& rim = it->second;
+    if (zone == "power_supply") {
+      if (!rim.power_supply_fan)
+        throw std::invalid_argument(fmt::format("RIM {} has no power-supply fan", rr));
+      rim.power_supply_rpm = rpm;
+    } else if (zone == "slot_card") {
+      if (!rim.slot_card_fan)
+        throw std::invalid_argument(fmt::format("RIM {} has no slot-card fan", rr));
+      rim.slot_card_rpm = rpm;
+    } else {
+      throw std::invalid_argument("fan zone must be 'power_supply' or 'slot_card'");
+    }
+  }
+  publish_fans();
+  tree_.update();
+  dirty_ = false;
+}
+
+void Rack::set_rim_mcm_errors(uint8_t rr, uint32_t bits) {
+  auto it = rims_.find(rr);
+  if (it == rims_.end()) throw std::invalid_argument(fmt::format("there is no RIM {}", rr));
+  constexpr uint32_t kMcm = rim_event::kSlotMachineMcm0 | rim_event::kSoutCompareMcm0 |
+                            rim_event::kSlotMachineMcm1 | rim_event::kSoutCompareMcm1;
+  if (bits & ~kMcm) throw std::invalid_argument("MCM error bits are 16..19 of 0x2rr1:08");
+  it->second.mcm_errors = bits;
+  publish_fans();
+  tree_.update();
+  dirty_ = false;
+}
+
+void Rack::publish_fans() {
+  coe::ObjectDictionary& od = device_.dictionary();
+  const double nominal = options_.fan_nominal_rpm;
+  auto deviation = [nominal](double rpm) { return (rpm / nominal - 1.0) * 100.0; };
+  coe::Object* dev = od.find(0x2000);
+  set_real(dev, 0x0D, deviation(cpu_fan_rpm_));
+  set_real(dev, 0x0E, cpu_fan_rpm_);
+  tree_.set_device_events(fan_level_bits(deviation(cpu_fan_rpm_)) << 8);  // Table 15 bits 8-10
+  for (const auto& [rr, rim] : rims_) {
+    coe::Object* info = od.find(mdp::rim_info_index(rr));
+    // Guide Table 2: a missing fan reads -100 (deviation) and 0 (RPM).
+    const double ps_dev = rim.power_supply_fan ? deviation(rim.power_supply_rpm) : -100.0;
+    const double slot_dev = rim.slot_card_fan ? deviation(rim.slot_card_rpm) : -100.0;
+    set_real(info, 0x0A, ps_dev);
+    set_real(info, 0x0B, slot_dev);
+    set_real(info, 0x0C, rim.power_supply_fan ? rim.power_supply_rpm : 0.0);
+    set_real(info, 0x0D, rim.slot_card_fan ? rim.slot_card_rpm : 0.0);
+    uint32_t events = 0;
+    if (rim.slot_card_fan) events |= fan_level_bits(slot_dev) << 8;    // Table 16 8-10
+    if (rim.power_supply_fan) events |= fan_level_bits(ps_dev) << 12;  // 12-14
+    events |= rim.mcm_errors;
+    tree_.set_rim_events(rr, events);
+  }
+  dirty_ = true;
+}
+
+void Rack::set_cpu_temperature(double celsius, bool publish_now) {
+  if (!std::isfinite(celsius) || celsius < -55.0 || celsius > 150.0)
+    throw std::invalid_argument("CPU temperature must be -55..150 degC");
+  cpu_temp_ = celsius;
+  if (publish_now) publish_cpu_temperature();
+}
+
+void Rack::publish_cpu_temperature() {
+  // Guide §4.8: 0.5 °C resolution, a new reading every 30 s.
+  const double q = std::round(cpu_temp_ * 2.0) / 2.0;
+  cpu_temp_published_ = q;
+  set_real(device_.dictionary().find(0x2000), 0x0F, q);
+  cpu_next_publish_ = now() + options_.cpu_temperature_period_s;
+  const uint8_t data[5] = {0, 0, 0xFF, 0, 0};
+  if (q >= options_.cpu_temperature_limit_c && !over_temperature_) {
+    over_temperature_ = true;
+    device_.raise_emergency(emcy::kOverTemperature, emcy::kRegGeneric | emcy::kRegTemperature,
+                            {data[0], data[1], data[2], data[3], data[4]});
+  } else if (q < options_.cpu_temperature_limit_c - 2.0 && over_temperature_) {
+    // 2 °C hysteresis so a reading at the limit does not flood the mailbox.
+    over_temperature_ = false;
+    device_.raise_emergency(emcy::kNoError, 0, {data[0], data[1], data[2], data[3], data[4]});
+  }
+}
+
+void Rack::set_wiring_fault(uint16_t module, size_t channel, WiringFault fault) {
+  CardDriver* d = driver(module);
+  if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
+  if (!d->detects_wiring_faults())
+    throw std::invalid_argument(fmt::format(
+        "module {} ({}) cannot detect wiring faults: only sourcing digital outputs can (guide "
+        "4.7)",
+        module, d->card().name));
+  if (channel >= d->outputs().size())
+    throw std::invalid_argument(
+        fmt::format("module {} has {} output channels", module, d->outputs().size()));
+  d->set_wiring_fault(channel, fault);
+  evaluate_faults();
+  tree_.update();
+  dirty_ = false;
+}
+
+void Rack::set_sensor_open(uint16_t module, size_t channel, bool open) {
+  CardDriver* d = driver(module);
+  if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
+  if (!d->has_sensor_break())
+    throw std::invalid_argument(
+        fmt::format("module {} ({}) is not a thermocouple or RTD card", module, d->card().name));
+  if (channel >= d->inputs().size())
+    throw std::invalid_argument(
+        fmt::format("module {} has {} input channels", module, d->inputs().size()));
+  d->inputs()[channel].open = open;
+}
+
+void Rack::set_loop_ohms(uint16_t module, size_t channel, double ohms) {
+  CardDriver* d = driver(module);
+  if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
+  if (!d->card().thermocouple_ohms)
+    throw std::invalid_argument(
+        fmt::format("module {} ({}) has no loop resistance (0x5nn4)", module, d->card().name));
+  if (channel >= d->inputs().size())
+    throw std::invalid_argument(
+        fmt::format("module {} has {} input channels", module, d->inputs().size()));
+  if (!std::isfinite(ohms) || ohms < 0.0 || ohms > 65534.0)
+    throw std::invalid_argument("loop_ohms must be 0..65534");
+  d->inputs()[channel].loop_ohms = ohms;
+}
+
+void Rack::set_source(uint16_t module, size_t channel, std::string_view kind,
+                      const SourceParams& params) {
+  CardDriver* d = driver(module);
+  if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
+  if (channel >= d->inputs().size()) {
+    throw std::invalid_argument(fmt::format("module {} ({}) has {} input channels", module,
+                                            d->card().name, d->inputs().size()));
+  }
+  // Validate everything before changing anything.
+  std::optional<double> ohms;
+  std::optional<bool> open;
+  if (auto it = params.find("loop_ohms"); it != params.end()) {
+    char* end = nullptr;
+    ohms = std::strtod(it->second.c_str(), &end);
+    if (end == it->second.c_str() || *end != '\0')
+      throw std::invalid_argument("loop_ohms is not a number");
+    if (!d->card().thermocouple_ohms) throw std::invalid_argument("loop_ohms: not a thermocouple");
+  }
+  if (auto it = params.find("open"); it != params.end()) {
+    if (it->second != "true" && it->second != "false")
+      throw std::invalid_argument("open must be true or false");
+    open = it->second == "true";
+    if (!d->has_sensor_break()) throw std::invalid_argument("open: not a thermocouple or RTD");
+  }
+  if (params.count("cold_junction_c"))
+    throw std::invalid_argument("cold_junction_c is a card option, not a channel option");
+  SourceContext ctx = source_context();
+  std::unique_ptr<Source> s = make_source(kind, params, ctx);
+  if (ohms) set_loop_ohms(module, channel, *ohms);
+  if (open) d->inputs()[channel].open = *open;
+  d->inputs()[channel].source = std::move(s);
+}
+
+OutputRef Rack::output_ref(uint8_t rim, uint8_t slot, uint8_t channel) {
+  CardDriver* d = driver_at(rim, slot);
+  if (d == nullptr) return {nullptr, fmt::format("no card in RIM {} slot {}", rim, slot)};
+  if (channel >= d->outputs().size()) {
+    return {nullptr, fmt::format("RIM {} slot {} ({}) has no output channel {}", rim, slot,
+                                 d->card().name, channel)};
+  }
+  return {&d->outputs()[channel].wire, fmt::format("rim{}.slot{}.out{}", rim, slot, channel)};
+}
+
+StateSpacePlant& Rack::plant(const std::string& name, const SourceParams& params) {
+  auto it = plants_.find(name);
+  if (it != plants_.end()) return *it->second;
+  auto p = make_plant(params, options_.cycle_time_s, [this](const std::string& ref) {
+    // "rim.slot.channel"
+    uint8_t v[3] = {};
+    size_t start = 0;
+    for (int k = 0; k < 3; ++k) {
+      const size_t dot = k < 2 ? ref.find('.', start) : ref.size();
+      if (dot == std::string::npos ||
+          !parse_u8(std::string_view(ref).substr(start, dot - start), v[k]))
+        return OutputRef{nullptr, fmt::format("'{}' is not rim.slot.channel", ref)};
+      start = dot + 1;
+    }
+    return output_ref(v[0], v[1], v[2]);
+  });
+  StateSpacePlant& ref = *p;
+  plants_.emplace(name, std::move(p));
+  return ref;
+}
+
+SourceContext Rack::source_context() {
+  SourceContext ctx;
+  ctx.output = [this](uint8_t rim, uint8_t slot, uint8_t ch) { return output_ref(rim, slot, ch); };
+  ctx.module_position = [this](uint16_t module, uint8_t& rim, uint8_t& slot) {
+    if (module == 0 || module > drivers_.size()) return false;
+    rim = drivers_[module - 1]->module().rim;
+    slot = drivers_[module - 1]->module().slot;
+    return true;
+  };
+  ctx.plant = [this](const std::string& name, const SourceParams& params) -> StateSpacePlant& {
+    return plant(name, params);
+  };
+  return ctx;
+}
+
+void Rack::refresh() {
+  if (state_ != coe::EsmState::SafeOp && state_ != coe::EsmState::Op) {
+    // No process data runs: sample the inputs here so SDO reads and `ctl list` are live.
+    const double t = now();
+    for (size_t i = 0; i < drivers_.size(); ++i) {
+      if (rim_online(module_rim_[i])) drivers_[i]->write_inputs(t - t0_, options_.cycle_time_s);
+    }
+  }
+  publish_fans();
+  evaluate_faults();
+  tree_.update();
+  dirty_ = false;
+}
+
+}  // namespace rackcat::modules

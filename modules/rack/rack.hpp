@@ -1,0 +1,169 @@
+// The emulated rack's behaviour behind an mdp::Device: one slot-card driver per module, the
+// signal models, safe states, the RIM state machine with fans and CPU temperature, the
+// exception tree with its CoE Emergencies, and the fault-injection control API.
+//
+// Use (the lead's `rackcat run`):
+//
+//   mdp::Device device(config);
+//   modules::Rack rack(device);                         // attaches itself as CycleListener
+//   rack.set_state_request_handler([&](coe::EsmState to, uint16_t al_status) {
+//     esc_loop.post([&, to, al_status] { esc.application_error(to, al_status); });
+//   });
+//   // In ecat::Application::on_state_request(from, to), after device.request_state():
+//   //   if (uint16_t code = rack.check_state_request(from, to)) return code;
+//   rack.start_uart_ptys();                             // prints each /dev/pts/N
+//   rack.start_control_api(8765, [&](std::function<void()> f) { esc_loop.post(std::move(f)); });
+//
+// Threading: everything except start/stop_control_api runs on the thread that drives the
+// Device (the ESC's cyclic thread). The control API's HTTP thread hands each request to that
+// thread through the post function and waits for the answer.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "coe/access.hpp"
+#include "mdp/device.hpp"
+#include "modules/cards/card_driver.hpp"
+#include "modules/rack/events.hpp"
+#include "modules/rack/exception_tree.hpp"
+#include "modules/signals/source_factory.hpp"
+
+namespace rackcat::modules {
+
+class StateSpacePlant;
+class UartDriver;
+class ControlApi;
+
+struct RackOptions {
+  // Nominal process-data cycle: plants are discretised with it and stepped as often as it
+  // fits into the elapsed time.
+  double cycle_time_s = 0.001;
+  // Seconds since start, monotonic. Empty: std::chrono::steady_clock.
+  std::function<double()> clock;
+  double fan_nominal_rpm = 3000.0;
+  double cpu_temperature_c = 42.0;
+  double cpu_temperature_limit_c = 85.0;   // emergency 0x4210 at or above
+  double cpu_temperature_period_s = 30.0;  // guide §4.8: 0x2000:0F updates every 30 s
+};
+
+using PostFn = std::function<void(std::function<void()>)>;
+// Requested ESM change (e.g. OP -> SAFEOP with AL status 0x0070 and the error flag).
+using StateRequestFn = std::function<void(coe::EsmState to, uint16_t al_status_code)>;
+
+struct RimStatus {
+  uint8_t number = 0;
+  RimState state = RimState::Online;
+  bool comm_error = false;
+  bool power_supply_fan = false;
+  bool slot_card_fan = true;
+  double power_supply_rpm = 0.0;
+  double slot_card_rpm = 0.0;
+  uint32_t mcm_errors = 0;        // active 0x2rr1:08 bits 16..19 (SLOT machine / SOUT compare)
+  std::vector<uint16_t> modules;  // module numbers in this RIM
+};
+
+class Rack : public mdp::CycleListener {
+ public:
+  // Builds the drivers and the sources of the rack file's channel options. Throws
+  // mdp::ConfigError (file:line) for a bad source description.
+  explicit Rack(mdp::Device& device, RackOptions options = {});
+  ~Rack() override;
+  Rack(const Rack&) = delete;
+  Rack& operator=(const Rack&) = delete;
+
+  void set_state_request_handler(StateRequestFn fn) { state_request_ = std::move(fn); }
+  // Veto for AL state requests the device accepted: with Detect Modules Override 0 a RIM
+  // with mapped process data must be online for SAFEOP -> OP (guide §4.4). 0 = accept.
+  uint16_t check_state_request(coe::EsmState from, coe::EsmState to) const;
+
+  // Pseudo-terminals of the UART channels (logged: "UART module 19 channel 0: /dev/pts/4").
+  void start_uart_ptys();
+  // HTTP + JSON control API on 127.0.0.1:port (0 = pick a free port); returns the port.
+  uint16_t start_control_api(uint16_t port, PostFn post);
+  void stop_control_api();
+
+  // --- CycleListener (device thread).
+  void on_outputs(mdp::Device&) override;
+  void before_inputs(mdp::Device&) override;
+  void on_state_changed(mdp::Device&, coe::EsmState from, coe::EsmState to) override;
+  void on_watchdog_expired(mdp::Device&) override;
+  void on_exception_reset(mdp::Device&) override;
+  void on_detect_modules(mdp::Device&) override;
+  void on_parameters_loaded(mdp::Device&) override;
+  void on_device_reset(mdp::Device&, bool factory) override;
+
+  // --- State and fault injection (device thread).
+  mdp::Device& device() { return device_; }
+  coe::EsmState esm_state() const { return state_; }
+  bool outputs_valid() const { return outputs_valid_; }
+  double now() const;
+  std::span<const std::unique_ptr<CardDriver>> drivers() const { return drivers_; }
+  CardDriver* driver(uint16_t module_number);
+  CardDriver* driver_at(uint8_t rim, uint8_t slot);
+  const std::map<uint8_t, RimStatus>& rims() const { return rims_; }
+  const ExceptionTree& exceptions() const { return tree_; }
+
+  // Replace an input channel's source; throws std::invalid_argument with the reason.
+  void set_source(uint16_t module, size_t channel, std::string_view kind,
+                  const SourceParams& params);
+  void set_rim_state(uint8_t rim, RimState state, bool comm_error = false);
+  // zone: "power_supply", "slot_card" for RIMs; rim 0 = the control module's CPU fan.
+  void set_fan_rpm(uint8_t rim, std::string_view zone, double rpm);
+  // The RIM safety controllers' errors (0x2rr1:08 bits 16..19, rim_event::kSlotMachineMcm0 ...).
+  void set_rim_mcm_errors(uint8_t rim, uint32_t bits);
+  double cpu_fan_rpm() const { return cpu_fan_rpm_; }
+  void set_cpu_temperature(double celsius, bool publish_now);
+  double cpu_temperature() const { return cpu_temp_; }
+  double cpu_temperature_published() const { return cpu_temp_published_; }
+  void set_wiring_fault(uint16_t module, size_t channel, WiringFault fault);
+  void set_sensor_open(uint16_t module, size_t channel, bool open);
+  void set_loop_ohms(uint16_t module, size_t channel, double ohms);
+  bool detect_modules_override() const;
+  // Modules with process data in the current 0x1C12/0x1C13 assignment.
+  bool rim_has_mapped_process_data(uint8_t rim) const;
+  // Publish everything derived (fans, event status, exception tree) now; the control API
+  // calls it so changes show up in PREOP too, where no process data runs.
+  void refresh();
+
+ private:
+  OutputRef output_ref(uint8_t rim, uint8_t slot, uint8_t channel);
+  StateSpacePlant& plant(const std::string& name, const SourceParams& params);
+  SourceContext source_context();
+  void apply_safe_states();
+  void publish_fans();
+  void publish_cpu_temperature();
+  void evaluate_faults();
+  bool rim_online(uint8_t rim) const;
+
+  mdp::Device& device_;
+  RackOptions options_;
+  std::vector<std::unique_ptr<CardDriver>> drivers_;  // index = module number - 1
+  std::vector<uint8_t> module_rim_;                   // index = module number - 1
+  std::vector<UartDriver*> uarts_;
+  std::map<uint8_t, RimStatus> rims_;
+  std::map<std::string, std::unique_ptr<StateSpacePlant>> plants_;
+  ExceptionTree tree_;
+  StateRequestFn state_request_;
+  std::unique_ptr<ControlApi> api_;
+
+  coe::EsmState state_ = coe::EsmState::Init;
+  bool outputs_valid_ = false;
+  double t0_ = 0.0;
+  double last_t_ = 0.0;
+  double plant_t_ = 0.0;
+  double cpu_fan_rpm_;
+  double cpu_temp_;
+  double cpu_temp_published_ = 0.0;
+  double cpu_next_publish_ = 0.0;
+  bool over_temperature_ = false;
+  bool dirty_ = true;
+  std::vector<uint32_t> last_safe_, last_unsafe_;
+};
+
+}  // namespace rackcat::modules
