@@ -1,0 +1,146 @@
+"""Failures of the matrix that are the master's bug, with the evidence, and what rackcat did
+there, asserted from the capture instead (docs/INTEROP.md "Master bugs").
+
+A fail cell whose text matches `match` becomes "master bug" in the table and the rackcat-side
+check runs on the cell's capture; when a fixed master release passes the step, the entry is
+reported as stale so it can be removed. `reproducer` is the smallest program showing the bug
+(tests/conformance/reproducers/), kept so a fixed release can be adopted.
+"""
+import re
+import struct
+from dataclasses import dataclass
+from typing import Callable
+
+import capture
+
+
+@dataclass
+class Bug:
+    match: str
+    evidence: str
+    rackcat_side: Callable  # (pcap, expectations) -> text; raises AssertionError
+    reproducer: str = ""
+
+
+def _send_mbx(exp):
+    return exp["sii_words"][0x1A]  # SII word 0x1A: standard send mailbox offset (ETG.2010)
+
+
+def od_list_in_capture(pcap, exp):
+    lists = capture.od_lists(pcap, _send_mbx(exp))
+    assert lists, "no Get OD List response in the capture"
+    for station, indices in lists.items():
+        assert sorted(indices) == exp["od_indices"], \
+            f"station 0x{station:04X}: {len(indices)} indices sent, expected " \
+            f"{len(exp['od_indices'])}"
+    return f"rackcat sent all {len(exp['od_indices'])} indices (capture)"
+
+
+def emergency_in_capture(pcap, exp):
+    code = exp["emergency"]["code"]
+    got = capture.emergencies(pcap, _send_mbx(exp))
+    assert any(c == code and reg & 0x01 for _, c, reg in got), \
+        f"no Emergency 0x{code:04X} with the generic error bit in the capture: {got}"
+    return f"rackcat sent Emergency 0x{code:04X} (capture)"
+
+
+def segmented_upload_in_capture(pcap, exp):
+    """The initiate response of the complete-access upload of 0x2000: segmented (complete
+    size > what the mailbox holds), the size of the object, the data starting with subindex
+    0 (15) and its padding byte, then the part number."""
+    ups = [u for u in capture.sdo_uploads(pcap, _send_mbx(exp)) if u["index"] == 0x2000 and
+           u["ca"]]
+    assert ups, "no complete-access upload of 0x2000 in the capture"
+    up = ups[-1]
+    want = exp["ca_2000_bytes"]  # the object's bit size, subindex 0 in 16 bits
+    assert up["size"] == want, f"complete size {up['size']}, expected {want}"
+    data = bytes(up["data"])
+    assert len(data) < up["size"], "not a segmented upload"
+    assert data[:2] == b"\x0f\x00" and data[2:2 + len(exp["part_number"])] == \
+        exp["part_number"].encode(), f"first bytes {data[:16].hex()}"
+    return (f"rackcat's initiate response: complete size {up['size']}, {len(data)} data "
+            f"bytes from subindex 0 on (capture)")
+
+
+BUGS = {
+    ("soemx", "sdo_info_list"): Bug(
+        match=r"1 indices, expected",
+        evidence="soemx 0.1.1 `soemx_read_od_entry` (soemx_native.c) takes the return value "
+                 "of SOEM 2.x `ecx_readODlist` - the working counter, 1 - as the number of "
+                 "objects instead of `od.Entries`, so `sdo_info()` lists only the first object "
+                 "(it also re-reads the whole list for every object)",
+        rackcat_side=od_list_in_capture,
+        reproducer="reproducers/soemx_sdo_info.py"),
+    ("soemx", "emergency"): Bug(
+        match=r"no Emergency 0x4210; got \['0x94210'",
+        evidence="soemx 0.1.1 `Master.pop_error` builds `Emergency(slave, abort_code, ...)` "
+                 "from SOEM's `ec_errort`, where the 32-bit `AbortCode` overlays `ErrorCode` "
+                 "(16 bits), `ErrorReg` and `b1`: `error_code` is 0x94210 = error register "
+                 "0x09 << 16 | 0x4210",
+        rackcat_side=emergency_in_capture,
+        reproducer="reproducers/soemx_emergency.py"),
+}
+
+
+BUGS[("kickcat", "sdo_upload_segmented")] = Bug(
+    match=r"died with SIGSEGV",
+    evidence="KickCAT 2.5 `SDOMessage::processUpload` (lib/src/CoE/mailbox/request.cc), "
+             "segmented branch: after the complete size it reads a second UINT32 'size' "
+             "where ETG.1000.6 §5.6.2.4 puts the first data bytes, and copies that many bytes "
+             "(0x4946000F for 0x2000: subindex 0 = 15, then 'FI') into the client buffer: "
+             "segmentation fault",
+    rackcat_side=segmented_upload_in_capture,
+    reproducer="reproducers/kickcat_segmented_upload.py")
+
+
+def abort_in_capture(pcap, exp):
+    aborts = [(st, *struct.unpack_from("<HBI", body, 1))
+              for st, service, body in capture.coe_messages(pcap, _send_mbx(exp))
+              if service == 2 and body[:1] == b"\x80"]
+    assert any(a[1:] == (0x1234, 0, 0x06020000) for a in aborts), \
+        f"no abort 0x06020000 for 0x1234:00 (CoE service 2, command 0x80) in the capture: {aborts}"
+    return "rackcat sent abort 0x06020000 for 0x1234:00 (capture)"
+
+
+def entry_descriptions_in_capture(pcap, exp):
+    eds = capture.entry_descriptions(pcap, _send_mbx(exp))
+    checked = 0
+    for key in ("0x1018", "0x2000", "0x1C12"):
+        for sub, want in exp["objects"][key]["entries"].items():
+            got = eds.get((int(key, 16), int(sub)))
+            if got is None:
+                continue
+            info, dtype, bits, default, name = got
+            assert (dtype, bits, name) == (want["data_type"], want["bit_size"], want["name"]), \
+                f"{key}:{sub}: {got}"
+            assert not info & 0x10 or len(default) == (bits + 7) // 8, f"{key}:{sub} default"
+            checked += 1
+    assert checked, "no entry description response in the capture"
+    return f"rackcat's {checked} entry descriptions: value info, default value, name (capture)"
+
+
+BUGS[("kickcat", "sdo_abort")] = Bug(
+    match=r"Error while reading SDO - Timeout",
+    evidence="KickCAT 2.5 reports 'Error while reading SDO - Timeout' for an aborted upload: "
+             "rackcat's abort (CoE service 2 = SDO request, command 0x80, 0x1234:00, "
+             "0x06020000, ETG.1000.6 §5.6.2.7) is in the capture about 1 ms after the "
+             "request; SOEM (pysoem, soemx) and ethercrab decode the same abort",
+    rackcat_side=abort_in_capture,
+    reproducer="reproducers/kickcat_abort.py")
+BUGS[("kickcat", "sdo_info_desc")] = Bug(
+    match=r"name starts with the \d+-byte default value|name not decodable",
+    evidence="KickCAT 2.5 `Bus.read_entry_description` asks for the default value (value "
+             "info 0x10) and returns everything after the fixed part as the name: the "
+             "entry's default value comes first (ETG.1000.6 §5.6.3.6.3), e.g. "
+             "'\\x01\\x00\\x00\\x00Serial number' for 0x1018:04; a default with bytes that "
+             "are no UTF-8 (0x2000:09 = 0xFFFFFFFF) raises UnicodeDecodeError",
+    rackcat_side=entry_descriptions_in_capture,
+    reproducer="reproducers/kickcat_entry_description.py")
+
+
+def classify(master, step, cell):
+    """The Bug a fail cell is, or None."""
+    bug = BUGS.get((master, step))
+    if bug and cell["result"] == "fail" and re.search(bug.match, cell["detail"]):
+        return bug
+    return None
