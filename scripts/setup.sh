@@ -38,9 +38,14 @@ DEB_TEST=(
   libgtest-dev libgmock-dev libbenchmark-dev
   tshark libxml2-utils
   qemu-system-x86 linux-image-amd64 busybox-static
+  libpcap-dev
 )
 PY_DEMO_PACKAGES=(pysoem)
 PY_TEST_PACKAGES=(pytest)
+# The EtherCAT masters of the conformance matrix (tests/conformance, docs/INTEROP.md), pinned:
+# a new release is adopted by changing the version here and re-running the matrix. soemx
+# builds from source against libpcap (libpcap-dev above).
+PY_TEST_PINNED=(kickcat==2.5 soemx==0.1.1 pyecm==0.0.3 ebpfcat==1.0.0)
 
 deb=("${DEB_DEMO[@]}")
 py=("${PY_DEMO_PACKAGES[@]}")
@@ -80,6 +85,19 @@ done
 if [ ${#need_py[@]} -gt 0 ]; then
   echo "setup: installing Python package(s) into .venv: ${need_py[*]}"
   "$VENV/bin/python" -m pip install --disable-pip-version-check --progress-bar off "${need_py[@]}"
+fi
+if [ "$PROFILE" = test ]; then
+  need_pinned=()
+  for spec in "${PY_TEST_PINNED[@]}"; do
+    have=$("$VENV/bin/python" -c "import importlib.metadata as m; print(m.version('${spec%%==*}'))" \
+      2>/dev/null || true)
+    [ "$have" = "${spec#*==}" ] || need_pinned+=("$spec")
+  done
+  if [ ${#need_pinned[@]} -gt 0 ]; then
+    echo "setup: installing pinned EtherCAT masters into .venv: ${need_pinned[*]}"
+    "$VENV/bin/python" -m pip install --disable-pip-version-check --progress-bar off \
+      "${need_pinned[@]}"
+  fi
 fi
 # The master developers' package (python/rackcat_line), editable, when present.
 if [ "$PROFILE" = test ] && [ -f "$ROOT/python/pyproject.toml" ] &&

@@ -56,6 +56,11 @@ do_pysoem() {
   "$PY" -m pytest -q tests/interop -p no:cacheprovider
 }
 do_ethercrab() { bash scripts/ethercrab_interop.sh; }
+do_conformance() {
+  . scripts/python.sh
+  # the conformance matrix: every master on every rack (tests/conformance, docs/INTEROP.md)
+  "$PY" -m pytest -q tests/conformance -p no:cacheprovider
+}
 do_asan_build() {
   CC=clang CXX=clang++ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DRACKCAT_SANITIZE=ON -DRACKCAT_FUZZ=ON -DRACKCAT_BENCH=OFF >/dev/null
@@ -76,6 +81,7 @@ step "clang-tidy" do_tidy
 if [ "${SKIP_INTEROP:-0}" != 1 ]; then
   step "interop: pysoem over veth" do_pysoem
   [ -f scripts/ethercrab_interop.sh ] && step "interop: ethercrab over veth" do_ethercrab
+  step "interop: conformance matrix" do_conformance
 fi
 if [ "${SKIP_ASAN:-0}" != 1 ]; then
   step "sanitizer build" do_asan_build

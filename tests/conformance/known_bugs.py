@@ -52,12 +52,17 @@ def segmented_upload_in_capture(pcap, exp):
            u["ca"]]
     assert ups, "no complete-access upload of 0x2000 in the capture"
     up = ups[-1]
-    want = exp["ca_2000_bytes"]  # the object's bit size, subindex 0 in 16 bits
+    # the object's bit size has subindex 0 in 16 bits; from subindex 1 on it is left out
+    want = exp["ca_2000_bytes"] - (2 if up["sub"] == 1 else 0)
     assert up["size"] == want, f"complete size {up['size']}, expected {want}"
     data = bytes(up["data"])
-    assert len(data) < up["size"], "not a segmented upload"
-    assert data[:2] == b"\x0f\x00" and data[2:2 + len(exp["part_number"])] == \
-        exp["part_number"].encode(), f"first bytes {data[:16].hex()}"
+    assert len(data) < up["size"] or up["complete"], "not a segmented upload"
+    head = exp["part_number"].encode()
+    if up["sub"] == 0:
+        head = b"\x0f\x00" + head
+    assert data.startswith(head), f"first bytes {data[:16].hex()}"
+    if up["complete"]:
+        assert len(data) == up["size"], f"{len(data)} bytes in the segments"
     return (f"rackcat's initiate response: complete size {up['size']}, {len(data)} data "
             f"bytes from subindex 0 on (capture)")
 
@@ -136,6 +141,54 @@ BUGS[("kickcat", "sdo_info_desc")] = Bug(
              "are no UTF-8 (0x2000:09 = 0xFFFFFFFF) raises UnicodeDecodeError",
     rackcat_side=entry_descriptions_in_capture,
     reproducer="reproducers/kickcat_entry_description.py")
+
+
+def assignment_in_capture(pcap, exp):
+    """The PDO assignment rackcat answered while the master read it (0x1C12/0x1C13)."""
+    ups = {(u["index"], u["sub"]): bytes(u["data"])
+           for u in capture.sdo_uploads(pcap, _send_mbx(exp)) if not u["ca"]}
+    seen = 0
+    for index, pdos in ((0x1C12, exp["rx_assign"]), (0x1C13, exp["tx_assign"])):
+        for k, want in enumerate([bytes([len(pdos)])] + [struct.pack("<H", p) for p in pdos]):
+            got = ups.get((index, k))
+            if got is not None:  # what the master asked before it gave up
+                assert got == want, f"0x{index:04X}:{k:02X} = {got.hex()}, expected {want.hex()}"
+                seen += 1
+    assert seen, "no upload of 0x1C12/0x1C13 in the capture"
+    return f"rackcat's {seen} answers from 0x1C12/0x1C13 = the rack (capture)"
+
+
+def download_abort_in_capture(pcap, exp):
+    aborts = [(st, *struct.unpack_from("<HBI", body, 1))
+              for st, service, body in capture.coe_messages(pcap, _send_mbx(exp))
+              if service == 2 and body[:1] == b"\x80"]
+    assert any(a[1:3] == (0x2000, 4) for a in aborts), \
+        f"no abort for 0x2000:04 in the capture: {aborts}"
+    return "rackcat refused the 0-byte value with an abort and kept 0x2000:04 (capture)"
+
+
+BUGS[("ebpfcat", "sdo_download_normal")] = Bug(
+    match=r"expected CoE SDORES, got 2",
+    evidence="ebpfcat 1.0.0 `Terminal.sdo_write` packs a normal download as "
+             "`\"HBHB4x\"` with command 0x21 (size indicated): the complete size is always 0, "
+             "then the data (ETG.1000.6 §5.6.2.2: the complete size is the number of bytes); "
+             "rackcat takes the 0-byte value and refuses it (0x06090030, no IPv4 address)",
+    rackcat_side=download_abort_in_capture,
+    reproducer="reproducers/ebpfcat_normal_download.py")
+BUGS[("ebpfcat", "sdo_upload_segmented")] = Bug(
+    match=r"TypeError: sequence item 1: expected a bytes-like object, int found",
+    evidence="ebpfcat 1.0.0 `Terminal.sdo_read`, segmented upload: `ret += data[3:]` extends "
+             "the list of byte strings with the segment's integers, so `b\"\".join(ret)` "
+             "raises TypeError after the first segment",
+    rackcat_side=segmented_upload_in_capture,
+    reproducer="reproducers/ebpfcat_segmented_upload.py")
+BUGS[("ebpfcat", "pdo_sizes")] = Bug(
+    match=r"KeyError: 128",
+    evidence="ebpfcat 1.0.0 `Terminal.parse_pdos` knows PDO entries of 1-7, 8, 16, 32 and 64 "
+             "bits only (`{8: \"B\", 16: \"H\", 32: \"I\", 64: \"Q\"}[bits]`); the default "
+             "and 120-module racks map 128-bit entries (ETG.1000.6 allows any length)",
+    rackcat_side=lambda pcap, exp: assignment_in_capture(pcap, exp),
+    reproducer="")
 
 
 def classify(master, step, cell):
