@@ -125,8 +125,9 @@ def entry_descriptions_in_capture(pcap, exp):
 
 
 BUGS[("kickcat", "sdo_abort")] = Bug(
-    match=r"Error while reading SDO - Timeout",
-    evidence="KickCAT 2.5 reports 'Error while reading SDO - Timeout' for an aborted upload: "
+    match=r"Error while reading SDO - Timeout|error while checking mailboxes",
+    evidence="KickCAT 2.5 reports 'Error while reading SDO - Timeout' (or 'error while "
+             "checking mailboxes') for an aborted upload, without the abort code: "
              "rackcat's abort (CoE service 2 = SDO request, command 0x80, 0x1234:00, "
              "0x06020000, ETG.1000.6 §5.6.2.7) is in the capture about 1 ms after the "
              "request; SOEM (pysoem, soemx) and ethercrab decode the same abort",
@@ -158,6 +159,22 @@ def assignment_in_capture(pcap, exp):
     return f"rackcat's {seen} answers from 0x1C12/0x1C13 = the rack (capture)"
 
 
+def assignment_ca_in_capture(pcap, exp):
+    """The complete-access uploads of 0x1C12/0x1C13 from subindex 1: initiate (and any
+    segments the master asked for) agree with the rack's assignment."""
+    seen = 0
+    for u in capture.sdo_uploads(pcap, _send_mbx(exp)):
+        key = {0x1C12: "ca_1c12", 0x1C13: "ca_1c13"}.get(u["index"])
+        if key is None or not u["ca"]:
+            continue
+        want = bytes.fromhex(exp[key])[2 if u["sub"] == 1 else 0:]
+        assert u["size"] == len(want), f"0x{u['index']:04X}: complete size {u['size']}"
+        assert want.startswith(bytes(u["data"])), f"0x{u['index']:04X}: data differs"
+        seen += 1
+    assert seen, "no complete access of 0x1C12/0x1C13 in the capture"
+    return f"rackcat's {seen} complete-access answers = the rack's assignment (capture)"
+
+
 def download_abort_in_capture(pcap, exp):
     aborts = [(st, *struct.unpack_from("<HBI", body, 1))
               for st, service, body in capture.coe_messages(pcap, _send_mbx(exp))
@@ -181,6 +198,12 @@ BUGS[("ebpfcat", "sdo_upload_segmented")] = Bug(
              "the list of byte strings with the segment's integers, so `b\"\".join(ret)` "
              "raises TypeError after the first segment",
     rackcat_side=segmented_upload_in_capture,
+    reproducer="reproducers/ebpfcat_segmented_upload.py")
+BUGS[("ebpfcat", "complete_access")] = Bug(
+    match=BUGS[("ebpfcat", "sdo_upload_segmented")].match,
+    evidence=BUGS[("ebpfcat", "sdo_upload_segmented")].evidence + " (here: the complete "
+             "access of a PDO assignment longer than the mailbox)",
+    rackcat_side=lambda pcap, exp: assignment_ca_in_capture(pcap, exp),
     reproducer="reproducers/ebpfcat_segmented_upload.py")
 BUGS[("ebpfcat", "pdo_sizes")] = Bug(
     match=r"KeyError: 128",

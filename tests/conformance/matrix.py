@@ -47,7 +47,7 @@ MASTERS = {
     "pyecm": {"cmd": _py("pyecm_driver.py"), "module": "pyecm"},
     "kickcat": {"cmd": _py("kickcat_driver.py"), "module": "kickcat"},
     "ebpfcat": {"cmd": _py("ebpfcat_driver.py"), "module": "ebpfcat"},
-    "ethercrab": {"cmd": [str(ETHERCRAB)], "binary": ETHERCRAB},
+    "ethercrab": {"cmd": _py("ethercrab_driver.py"), "binary": ETHERCRAB},
 }
 
 
@@ -92,9 +92,9 @@ def _run(*cmd, check=True):
 class Cell:
     """One master on one rack: namespace, veth pair, rackcat, the driver."""
 
-    def __init__(self, master, rack, workdir):
+    def __init__(self, master, rack, workdir, tag=""):
         self.master, self.rack = master, rack
-        self.dir = Path(workdir) / f"{master}-{rack}"
+        self.dir = Path(workdir) / f"{master}-{rack}{'-' + tag if tag else ''}"
         shutil.rmtree(self.dir, ignore_errors=True)
         self.dir.mkdir(parents=True)
         tag = f"{os.getpid() % 100000}{len(master)}{len(rack)}{int(time.monotonic()*10) % 1000}"
@@ -206,39 +206,51 @@ MARK = {"pass": "pass", "fail": "FAIL", "n/a": "n/a", "not reached": "not reache
         "master bug": "master bug"}
 
 
-def _cell_text(r):
-    text = MARK.get(r["result"], r["result"])
-    if r["result"] != "pass" and r.get("detail"):
-        detail = r["detail"].replace("|", "/").replace("\n", " ")
-        if len(detail) > 160:
-            detail = detail[:157] + "..."
-        text += f": {detail}"
-    return text
+def _short(text, n=140):
+    text = text.replace("|", "/").replace("\n", " ")
+    return text if len(text) <= n else text[:n - 3] + "..."
 
 
 def render(results, not_run):
-    """results: {(master, rack): result dict}. not_run: {master: reason}."""
-    lines = []
+    """results: {(master, rack): result dict}. not_run: {master: reason}. Master-bug cells
+    point to a numbered list with the evidence below the tables."""
+    lines, bugs = [], {}
     masters = [m for m in MASTERS if any(k[0] == m for k in results)]
+
+    def cell(master, r):
+        if r["result"] == "pass":
+            return "pass"
+        if r["result"] == "master bug":
+            key = (master, r["detail"])
+            bugs.setdefault(key, (len(bugs) + 1, r))
+            return f"master bug [B{bugs[key][0]}]"
+        return f"{MARK.get(r['result'], r['result'])}: {_short(r.get('detail', ''))}"
+
+    lines += ["Steps (tests/conformance/scenario.py):", ""]
+    lines += [f"- `{step}`: {what}" for step, what in STEPS] + [""]
     for rack in RACKS:
         cols = [m for m in masters if (m, rack) in results]
         if not cols:
             continue
-        lines.append(f"### {RACKS[rack]['title']}")
-        lines.append("")
-        lines.append("| step | " + " | ".join(
-            f"{m} ({results[(m, rack)]['version']})" for m in cols) + " |")
+        lines += [f"### {RACKS[rack]['title']}", ""]
+        lines.append("| step | " + " | ".join(cols) + " |")
         lines.append("|---|" + "---|" * len(cols))
-        for step, what in STEPS:
-            row = [_cell_text(results[(m, rack)]["steps"][step]) for m in cols]
-            lines.append(f"| {step}: {what} | " + " | ".join(row) + " |")
+        for step, _ in STEPS:
+            row = [cell(m, results[(m, rack)]["steps"][step]) for m in cols]
+            lines.append(f"| {step} | " + " | ".join(row) + " |")
         secs = [f"{m} {results[(m, rack)]['seconds']} s" for m in cols]
-        lines.append("")
-        lines.append(f"Run time per master: {', '.join(secs)}.")
+        lines += ["", f"Driver run time: {', '.join(secs)}.", ""]
+    versions = sorted({(m, results[k]["version"]) for k in results for m in [k[0]]})
+    lines += ["Versions: " + ", ".join(v for _, v in versions) + ".", ""]
+    if bugs:
+        lines += ["Master bugs (the cell's step failed in the master; rackcat's side of it is "
+                  "asserted from the capture, tests/conformance/known_bugs.py):", ""]
+        for (master, _), (n, r) in sorted(bugs.items(), key=lambda kv: kv[1][0]):
+            lines.append(f"- **B{n}** ({master}): {r['detail']}. The master said: "
+                         f"`{_short(r.get('master_error', ''), 300)}`")
         lines.append("")
     if not_run:
-        lines.append("Not run in this matrix:")
-        lines.append("")
+        lines += ["Masters found in the registries that are not a column:", ""]
         for m, why in not_run.items():
             lines.append(f"- {m}: {why}")
         lines.append("")

@@ -46,6 +46,34 @@ def workdir(tmp_path_factory):
     return tmp_path_factory.mktemp("conformance")
 
 
+def _run_and_judge(master, rack, workdir, base, attempt=1):
+    with Cell(master, rack, workdir, tag=f"try{attempt}") as cell:
+        res = cell.run()
+    problems = []
+    expect = json.load(open(cell.dir / "expect.json"))
+    for step in STEP_IDS:
+        r = res["steps"][step]
+        bug = known_bugs.classify(master, step, r)
+        if bug:
+            try:
+                seen = bug.rackcat_side(res["pcap"], expect)
+            except AssertionError as e:
+                problems.append(f"{step}: master bug, but rackcat's side is wrong too: {e}")
+                seen = f"rackcat side FAILED: {e}"
+            r.update(result="master bug", detail=f"{bug.evidence}; {seen}",
+                     master_error=r["detail"])
+        was = base.get(step)
+        if was == "pass" and r["result"] != "pass":
+            problems.append(f"{step}: passed in the baseline, now {r['result']}: {r['detail']}")
+        elif r["result"] == "fail" and was != "fail":
+            problems.append(f"{step}: new failure: {r['detail']}")
+        elif was == "master bug" and r["result"] == "pass":
+            print(f"{master}/{rack}/{step}: the known master bug is gone - update known_bugs.py")
+    if res.get("slave_exit") not in (0, None):
+        problems.append(f"rackcat exited with {res['slave_exit']}")
+    return res, problems, cell
+
+
 @pytest.mark.parametrize("master,rack", CELLS, ids=[f"{m}-{r}" for m, r in CELLS])
 def test_cell(master, rack, workdir, matrix_results):
     if os.geteuid() != 0:
@@ -58,28 +86,14 @@ def test_cell(master, rack, workdir, matrix_results):
         assert not base, f"{master} is in the baseline but cannot run: {why}"
         pytest.skip(why)
 
-    with Cell(master, rack, workdir) as cell:
-        res = cell.run()
-    problems = []
-    for step in STEP_IDS:
-        r = res["steps"][step]
-        bug = known_bugs.classify(master, step, r)
-        if bug:
-            try:
-                seen = bug.rackcat_side(res["pcap"], json.load(open(cell.dir / "expect.json")))
-            except AssertionError as e:
-                problems.append(f"{step}: master bug, but rackcat's side is wrong too: {e}")
-                seen = f"rackcat side FAILED: {e}"
-            r.update(result="master bug", detail=f"{bug.evidence}; {seen}", master_error=r[
-                "detail"])
-        was = base.get(step)
-        if was == "pass" and r["result"] != "pass":
-            problems.append(f"{step}: passed in the baseline, now {r['result']}: {r['detail']}")
-        elif r["result"] == "fail" and was != "fail":
-            problems.append(f"{step}: new failure: {r['detail']}")
-        elif was == "master bug" and r["result"] == "pass":
-            print(f"{master}/{rack}/{step}: the known master bug is gone - update known_bugs.py")
+    res, problems, cell = _run_and_judge(master, rack, workdir, base)
+    if problems:
+        # One late frame on a loaded 2-core machine is load, not a bug: a cell that misses its
+        # baseline runs once more, and only a repeated miss fails (both are reported).
+        first = problems
+        res, problems, cell = _run_and_judge(master, rack, workdir, base, attempt=2)
+        res["notes"].append("first run missed the baseline, second run judged: " +
+                            " / ".join(first)[:500])
+        print(f"{master}/{rack}: first run: {first}")
     matrix_results[(master, rack)] = res
-    if res.get("slave_exit") not in (0, None):
-        problems.append(f"rackcat exited with {res['slave_exit']}")
     assert not problems, f"{master} on {rack} (logs {cell.dir}):\n  " + "\n  ".join(problems)
