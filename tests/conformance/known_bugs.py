@@ -205,6 +205,12 @@ BUGS[("ebpfcat", "complete_access")] = Bug(
              "access of a PDO assignment longer than the mailbox)",
     rackcat_side=lambda pcap, exp: assignment_ca_in_capture(pcap, exp),
     reproducer="reproducers/ebpfcat_segmented_upload.py")
+BUGS[("kickcat", "complete_access")] = Bug(
+    match=BUGS[("kickcat", "sdo_upload_segmented")].match,
+    evidence=BUGS[("kickcat", "sdo_upload_segmented")].evidence + " (here: the complete "
+             "access of a PDO assignment longer than the mailbox)",
+    rackcat_side=lambda pcap, exp: assignment_ca_in_capture(pcap, exp),
+    reproducer="reproducers/kickcat_segmented_upload.py")
 BUGS[("ebpfcat", "pdo_sizes")] = Bug(
     match=r"KeyError: 128",
     evidence="ebpfcat 1.0.0 `Terminal.parse_pdos` knows PDO entries of 1-7, 8, 16, 32 and 64 "

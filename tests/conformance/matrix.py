@@ -221,8 +221,9 @@ def render(results, not_run):
         if r["result"] == "pass":
             return "pass"
         if r["result"] == "master bug":
-            key = (master, r["detail"])
-            bugs.setdefault(key, (len(bugs) + 1, r))
+            key = (master, r.get("bug", r["detail"]))
+            bugs.setdefault(key, (len(bugs) + 1, r, []))
+            bugs[key][2].append((rack, r))
             return f"master bug [B{bugs[key][0]}]"
         return f"{MARK.get(r['result'], r['result'])}: {_short(r.get('detail', ''))}"
 
@@ -245,9 +246,10 @@ def render(results, not_run):
     if bugs:
         lines += ["Master bugs (the cell's step failed in the master; rackcat's side of it is "
                   "asserted from the capture, tests/conformance/known_bugs.py):", ""]
-        for (master, _), (n, r) in sorted(bugs.items(), key=lambda kv: kv[1][0]):
-            lines.append(f"- **B{n}** ({master}): {r['detail']}. The master said: "
-                         f"`{_short(r.get('master_error', ''), 300)}`")
+        for (master, evidence), (n, r, seen) in sorted(bugs.items(), key=lambda kv: kv[1][0]):
+            lines.append(f"- **B{n}** ({master}): {evidence}. The master said: "
+                         f"`{_short(r.get('master_error', ''), 240)}`. rackcat's side: " +
+                         "; ".join(f"{rk}: {x.get('rackcat_side', '')}" for rk, x in seen))
         lines.append("")
     if not_run:
         lines += ["Masters found in the registries that are not a column:", ""]

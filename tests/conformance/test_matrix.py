@@ -61,7 +61,7 @@ def _run_and_judge(master, rack, workdir, base, attempt=1):
                 problems.append(f"{step}: master bug, but rackcat's side is wrong too: {e}")
                 seen = f"rackcat side FAILED: {e}"
             r.update(result="master bug", detail=f"{bug.evidence}; {seen}",
-                     master_error=r["detail"])
+                     bug=bug.evidence, rackcat_side=seen, master_error=r["detail"])
         was = base.get(step)
         if was == "pass" and r["result"] != "pass":
             problems.append(f"{step}: passed in the baseline, now {r['result']}: {r['detail']}")

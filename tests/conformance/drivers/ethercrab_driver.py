@@ -21,25 +21,24 @@ BINARY = REPO / "interop/ethercrab/target/release/ethercrab-interop"
 
 # Check texts -> step, first match wins (interop/ethercrab/src/main.rs).
 RULES = [
-    (r"^init: |SubDevice count", "scan"),
+    (r"^init: |^SubDevice count", "scan"),
     (r"SII: (identity words|vendor|product)|matches the SII identity|serial differs", "identity"),
-    (r"\) SII: ", "sii"),
-    (r"expedited download|restoring 0x2000:09", "sdo_download_expedited"),
+    (r"\) SII: |reading the SII|description from SII", "sii"),
+    (r"\(expected Pre-Operational\)", "preop"),
+    (r"\(expected Safe-Operational\)", "safeop"),
+    (r"\(expected Init\)|^back to INIT", "init"),
+    (r"expedited download|restoring 0x2000:09|upload 0x2000:09", "sdo_download_expedited"),
     (r"aborts with|refused|was accepted|expected an SDO abort|instead of an abort", "sdo_abort"),
     (r"(normal|segmented) download|restored to|after restoring|ethercrab upload of|raw mailbox",
      "sdo_download_normal"),
     (r"0x2000:01 is \d+ bytes|upload 0x2000:04", "sdo_upload_normal"),
     (r"SDO info|Get OD List|object list", "sdo_info_list"),
-    (r"CoE: (0x1000|0x1018|0x1C00|0x1c1[23]|0x1[6a]|0x10)|assigns|mapping upload|CoE: 0x1008|"
-     r"0x1009|0x100a", "sdo_upload_expedited"),
-    (r"image sizes|PDO mapping|loopback wire|default-rack loopback", "pdo_sizes"),
+    (r"CoE: ", "sdo_upload_expedited"),
+    (r"image sizes|PDO mapping|loopback wire\(s\) to check|default-rack loopback", "pdo_sizes"),
+    (r"^OP reached", "op"),
     (r"SYNC0|0x092C|System Time", "dc_sync0"),
-    (r"SafeOp|SAFE-OP", "safeop"),
-    (r"OP reached|Op\b", "op"),
-    (r"loopback|echo|lag", "loopback"),
-    (r"cycle|working counter|WKC", "cycles"),
-    (r"back to INIT|Init\b|INIT", "init"),
-    (r"PreOp|PRE-OP", "preop"),
+    (r"loopback of", "loopback"),
+    (r"^\d+ cycles|^cycle \d+", "cycles"),
 ]
 # Fatal errors ("stopped: ...") -> the step that was running.
 STOPS = [
