@@ -38,13 +38,13 @@ DEB_TEST=(
   libgtest-dev libgmock-dev libbenchmark-dev
   tshark libxml2-utils
   qemu-system-x86 linux-image-amd64 busybox-static
-  libpcap-dev
+  libpcap-dev python3-dev
 )
 PY_DEMO_PACKAGES=(pysoem)
 PY_TEST_PACKAGES=(pytest)
 # The EtherCAT masters of the conformance matrix (tests/conformance, docs/INTEROP.md), pinned:
 # a new release is adopted by changing the version here and re-running the matrix. soemx
-# builds from source against libpcap (libpcap-dev above).
+# builds from source against libpcap (libpcap-dev, python3-dev above).
 PY_TEST_PINNED=(kickcat==2.5 soemx==0.1.1 pyecm==0.0.3 ebpfcat==1.0.0)
 
 deb=("${DEB_DEMO[@]}")

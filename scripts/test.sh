@@ -5,8 +5,10 @@
 #   2. release build (gcc) -> GoogleTest suite under ctest, then clang-tidy over the library
 #      and app sources (scripts/tidy.sh: any finding fails)
 #   3. wire interop against real masters over veth pairs in private network namespaces:
-#      pysoem (pytest, tests/interop) and ethercrab (scripts/ethercrab_interop.sh); they skip
-#      with a message when not root
+#      pysoem (pytest, tests/interop), ethercrab (scripts/ethercrab_interop.sh), then the
+#      conformance matrix (tests/conformance: pysoem, soemx, pyecm, kickcat, ebpfcat,
+#      ethercrab on three racks; rewrites docs/INTEROP.md's matrix); they skip with a message
+#      when not root
 #   4. sanitizer build (clang, ASan+UBSan, with the libFuzzer targets) -> the whole ctest suite
 #      again, then every fuzz target for a bounded time on its seed corpus
 #   5. a short bounded soak run (scripts/soak.sh), when present

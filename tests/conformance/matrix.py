@@ -71,7 +71,15 @@ NOT_RUNNABLE = {
     "industriagents-ethercat-mcp, am-sdk, gsv8-ethercat, hdrive-etc, pyetg1510 (PyPI)": "an MCP "
     "server over pysoem and SDKs of particular devices / an ETG.1510 diagnosis client, not "
     "masters of their own",
+    "ethercat 0.3.1 (crates.io, `cargo info ethercat`)": "Rust binding of the IgH EtherLab "
+    "master, which runs as a kernel module driven through /dev/EtherCAT0: no registry here "
+    "carries that module (`apt-cache search ethercat` finds nothing) and this machine's kernel "
+    "(6.18.44-fc, no /lib/modules for it) loads no out-of-tree module",
+    "soem 0.3.0, ethercat-soem 0.2.0 (crates.io, `cargo info`)": "Rust bindings that compile "
+    "SOEM's C sources: SOEM again, as in the pysoem, soemx and pyecm columns",
 }
+# crates.io has no package list to grep here and `cargo search` is not served by the registry
+# mirror: the crates above were looked up by name (`cargo info NAME`).
 
 
 def unavailable(master):
