@@ -125,12 +125,14 @@ def entry_descriptions_in_capture(pcap, exp):
 
 
 BUGS[("kickcat", "sdo_abort")] = Bug(
-    match=r"Error while reading SDO - Timeout|error while checking mailboxes",
-    evidence="KickCAT 2.5 reports 'Error while reading SDO - Timeout' (or 'error while "
-             "checking mailboxes') for an aborted upload, without the abort code: "
-             "rackcat's abort (CoE service 2 = SDO request, command 0x80, 0x1234:00, "
-             "0x06020000, ETG.1000.6 §5.6.2.7) is in the capture about 1 ms after the "
-             "request; SOEM (pysoem, soemx) and ethercrab decode the same abort",
+    match=r"Error while reading SDO - Timeout",
+    evidence="KickCAT 2.5 takes the abort but does not report it: `Bus::readSDO` "
+             "(lib/master/src/CoE.cc) throws 'Error while reading SDO' only for a finished "
+             "message whose status is neither SUCCESS nor TIMEDOUT - here the abort code - and "
+             "the Python exception renders that status as 'Timeout', without the code; "
+             "rackcat's abort (CoE service 2, command 0x80, 0x1234:00, 0x06020000, ETG.1000.6 "
+             "§5.6.2.7) is in the capture, and SOEM (pysoem, soemx, pyecm) and ethercrab "
+             "decode the same abort",
     rackcat_side=abort_in_capture,
     reproducer="reproducers/kickcat_abort.py")
 BUGS[("kickcat", "sdo_info_desc")] = Bug(

@@ -30,6 +30,9 @@ def main():
     args, exp = parse_args()
     rec = Recorder(args.out, "kickcat", version())
     link = kickcat.create_link(args.iface, "")
+    # a reply later than the link timeout is a lost datagram; 20 ms as the pysoem runs give
+    # SOEM (tests/interop): the machine is shared, a late frame is not a lost one
+    link.set_timeout(datetime.timedelta(milliseconds=20))
     bus = kickcat.Bus(link)
     scenario(bus, rec, exp)
 

@@ -1,4 +1,5 @@
-"""KickCAT 2.5: an SDO abort is reported as a timeout (known_bugs.py)."""
+"""KickCAT 2.5: an SDO abort reaches Python as 'Error while reading SDO - Timeout', without
+its code (known_bugs.py)."""
 import datetime
 
 from harness import main
