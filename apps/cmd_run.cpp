@@ -10,6 +10,7 @@
 // missing interface or permission is one line and exit 2.
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -95,13 +96,16 @@ int run(const RunArgs& a) {
   std::printf("rackcat: state directory %s; %s\n", state_dir.c_str(),
               racks.front()->device().load_report().c_str());
   if (!a.no_ptys) racks.front()->rack().start_uart_ptys();
+  // The control API of slave 0's rack; destroyed (its HTTP thread stopped) before the racks.
+  std::optional<modules::ControlApi> control;
   if (!a.no_control) {
     try {
-      const uint16_t port = racks.front()->rack().start_control_api(
-          static_cast<uint16_t>(a.control_port),
-          [&runner](std::function<void()> f) { runner.loop().post(std::move(f)); });
+      control.emplace(racks.front()->rack(),
+                      [&runner](std::function<void()> f) { runner.loop().post(std::move(f)); });
+      const uint16_t port = control->listen(static_cast<uint16_t>(a.control_port));
       std::printf("rackcat: control API on http://127.0.0.1:%u\n", port);
     } catch (const std::exception& e) {
+      control.reset();
       std::fprintf(stderr, "rackcat: control API not started: %s\n", e.what());
     }
   }

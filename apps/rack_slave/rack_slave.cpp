@@ -28,7 +28,6 @@ RackSlave::RackSlave(mdp::RackConfig config, const std::string& state_dir, int p
 
 RackSlave::~RackSlave() {
   device_->remove_listener(&reset_listener_);
-  rack_->stop_control_api();
   rack_.reset();  // detaches from the device before the device goes
 }
 

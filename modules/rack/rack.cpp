@@ -11,7 +11,6 @@
 
 #include "mdp/sync_manager_layout.hpp"
 #include "modules/cards/uart_driver.hpp"
-#include "modules/control/control_api.hpp"
 #include "modules/signals/state_space_plant.hpp"
 
 namespace rackcat::modules {
@@ -148,7 +147,6 @@ Rack::Rack(mdp::Device& device, RackOptions options)
 
 Rack::~Rack() {
   device_.remove_listener(this);
-  stop_control_api();
   for (UartDriver* u : uarts_) u->stop_ptys();
 }
 
@@ -179,17 +177,6 @@ void Rack::start_uart_ptys() {
                    u->module().rim, u->module().slot, c, u->channel(c).path);
     }
   }
-}
-
-uint16_t Rack::start_control_api(uint16_t port, PostFn post) {
-  stop_control_api();
-  api_ = std::make_unique<ControlApi>(*this, std::move(post));
-  return api_->listen(port);
-}
-
-void Rack::stop_control_api() {
-  if (api_) api_->stop();
-  api_.reset();
 }
 
 // ---- cyclic path ---------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 // The emulated rack's behaviour behind an mdp::Device: one slot-card driver per module, the
 // signal models, safe states, the RIM state machine with fans and CPU temperature, the
-// exception tree with its CoE Emergencies, and the fault-injection control API.
+// exception tree with its CoE Emergencies. The fault-injection control API
+// (modules/control/control_api.hpp) is a separate object its owner creates on a Rack.
 //
 // Use (the lead's `rackcat run`):
 //
@@ -12,11 +13,10 @@
 //   // In ecat::Application::on_state_request(from, to), after device.request_state():
 //   //   if (uint16_t code = rack.check_state_request(from, to)) return code;
 //   rack.start_uart_ptys();                             // prints each /dev/pts/N
-//   rack.start_control_api(8765, [&](std::function<void()> f) { esc_loop.post(std::move(f)); });
 //
-// Threading: everything except start/stop_control_api runs on the thread that drives the
-// Device (the ESC's cyclic thread). The control API's HTTP thread hands each request to that
-// thread through the post function and waits for the answer.
+// Threading: everything runs on the thread that drives the Device (the ESC's cyclic thread).
+// The control API's HTTP thread hands each request to that thread through a PostFn and waits
+// for the answer.
 #pragma once
 
 #include <cstdint>
@@ -38,7 +38,6 @@ namespace rackcat::modules {
 
 class StateSpacePlant;
 class UartDriver;
-class ControlApi;
 
 struct RackOptions {
   // Nominal process-data cycle: plants are discretised with it and stepped as often as it
@@ -84,9 +83,6 @@ class Rack : public mdp::CycleListener {
 
   // Pseudo-terminals of the UART channels (logged: "UART module 19 channel 0: /dev/pts/4").
   void start_uart_ptys();
-  // HTTP + JSON control API on 127.0.0.1:port (0 = pick a free port); returns the port.
-  uint16_t start_control_api(uint16_t port, PostFn post);
-  void stop_control_api();
 
   // --- CycleListener (device thread).
   void on_outputs(mdp::Device&) override;
@@ -150,7 +146,6 @@ class Rack : public mdp::CycleListener {
   std::map<std::string, std::unique_ptr<StateSpacePlant>> plants_;
   ExceptionTree tree_;
   StateRequestFn state_request_;
-  std::unique_ptr<ControlApi> api_;
 
   coe::EsmState state_ = coe::EsmState::Init;
   bool outputs_valid_ = false;

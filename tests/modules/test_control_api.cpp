@@ -155,10 +155,11 @@ TEST_F(ControlApiTest, FaultInjectionEndpoints) {
 
 TEST_F(ControlApiTest, ServesHttpOnLocalhostThroughThePostFunction) {
   int posted = 0;
-  const uint16_t port = rack.start_control_api(0, [&](std::function<void()> f) {
+  ControlApi http(rack, [&](std::function<void()> f) {
     ++posted;
     f();  // the test thread stands in for the device thread
   });
+  const uint16_t port = http.listen(0);
   ASSERT_GT(port, 0);
   httplib::Client cli("127.0.0.1", port);
   auto res = cli.Get("/api/esm");
@@ -171,5 +172,5 @@ TEST_F(ControlApiTest, ServesHttpOnLocalhostThroughThePostFunction) {
   EXPECT_NE(json::parse(bad->body)["error"].get<std::string>().find("'rim' must be 1..5"),
             std::string::npos);
   EXPECT_EQ(posted, 2);
-  rack.stop_control_api();
+  http.stop();
 }
