@@ -3,9 +3,6 @@
 // 0xF002) with the stored parameters.
 #include "mdp/device.hpp"
 
-#include <openssl/evp.h>
-#include <zlib.h>
-
 #include <algorithm>
 #include <bit>
 #include <chrono>
@@ -22,6 +19,7 @@
 #include "mdp/parameter_set.hpp"
 #include "mdp/parameter_store.hpp"
 #include "mdp/parameter_writer.hpp"
+#include "mdp/state_directory.hpp"
 
 namespace rackcat::mdp {
 
@@ -55,13 +53,6 @@ int64_t parse_clock(std::string_view s) {
   return static_cast<int64_t>(timegm(&tm));
 }
 
-std::vector<uint8_t> digest(const EVP_MD* md, std::span<const uint8_t> data) {
-  unsigned char out[EVP_MAX_MD_SIZE];
-  unsigned int len = 0;
-  EVP_Digest(data.data(), data.size(), out, &len, md, nullptr);
-  return std::vector<uint8_t>(out, out + len);
-}
-
 }  // namespace
 
 struct Device::Impl {
@@ -71,6 +62,7 @@ struct Device::Impl {
   std::unique_ptr<coe::SdoServer> sdo;
   std::unique_ptr<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
   std::unique_ptr<ParameterSet> params;
+  std::shared_ptr<StateDirectory> dir;
   std::unique_ptr<ParameterStore> store;
   std::unique_ptr<ParameterWriter> writer;  // after `store`: destroyed (and flushed) first
   std::vector<uint8_t> default_payload;     // the parameter set as shipped (factory defaults)
@@ -81,6 +73,7 @@ struct Device::Impl {
   SyncStatistics stats[2];
   std::chrono::steady_clock::time_point power_on = std::chrono::steady_clock::now();
   int64_t clock_offset_s = 0;  // clock written to 0x2000:08 minus the system clock
+  bool reset_factory = false;  // the 0xFBF0 command the worker executes is a factory reset
   uint64_t last_sync_ns = 0;
   std::chrono::steady_clock::time_point last_sync_at{};
   coe::diag::History history{kDiagnosisMessages};
@@ -88,9 +81,7 @@ struct Device::Impl {
   struct PendingCommand {
     uint8_t status = 0;
     std::vector<uint8_t> response;
-    std::vector<uint8_t> payload;  // 0xFBF4: the parameters to apply
-    bool factory = false;          // 0xFBF0
-    bool executed = false;         // the write carried a command (not a write-back)
+    bool executed = false;  // the write carried a command (not a write-back)
   } pending;
 
   template <class F>
@@ -105,30 +96,89 @@ struct Device::Impl {
   }
 
   // --- stored parameters -------------------------------------------------------------------
-  // Applies the stored file if it is valid; reports what happened.
+  // A stored payload the device may apply: the right size and every value one an SDO write
+  // would accept. Empty when it is; else the one-line reason it is ignored.
+  std::string refuse(std::span<const uint8_t> payload) const {
+    const std::string why = params->check(payload);
+    return why.empty() ? why : "ignored parameter file " + store->path() + ": " + why;
+  }
+
+  // Start-up: applies the stored file if it is valid; reports what happened. A damaged,
+  // foreign, oversized or planted file leaves the defaults (one line in load_report).
   void load_stored() {
     std::vector<uint8_t> payload;
     const auto r = store->load(params->fingerprint(), payload, load_report);
-    if (r == ParameterStore::LoadResult::Loaded && !params->apply(payload)) {
-      load_report = "ignored parameter file " + store->path() + ": size does not match";
+    if (r != ParameterStore::LoadResult::Loaded) return;
+    if (std::string why = refuse(payload); !why.empty()) {
+      load_report = std::move(why);
+      return;
     }
+    params->apply(payload);
   }
 
-  // The payload 0xFBF3 checksums: the file as stored now, or the shipped defaults without one.
-  std::vector<uint8_t> stored_payload() {
-    std::vector<uint8_t> payload;
-    std::string detail;
-    if (store->load(params->fingerprint(), payload, detail) == ParameterStore::LoadResult::Loaded)
-      return payload;
-    return default_payload;
-  }
-
-  void power_on_reset() {
+  // Every object back to its power-on value, then `stored` (already read by the worker) if it
+  // passes the checks.
+  void power_on_reset(const ParameterWriter::Result& stored) {
     od.for_each([](Object& o) { o.load_defaults(); });
     history.bind(*od.find(coe::diag::kIndex));
     clock_offset_s = 0;
-    load_stored();
+    load_report = stored.report;
+    if (stored.stored) {
+      if (std::string why = refuse(stored.bytes); !why.empty()) {
+        load_report = std::move(why);
+      } else {
+        params->apply(stored.bytes);
+      }
+    }
     image->compile();
+  }
+
+  // Status (subindex 2) and response (subindex 3: status, 0, response bytes) of a command
+  // whose worker job has finished.
+  void complete(uint16_t index, uint8_t status, std::span<const uint8_t> response = {}) {
+    Object* o = od.find(index);
+    if (o == nullptr) return;
+    o->set_u(2, status);
+    auto resp = o->bytes(3);
+    std::fill(resp.begin(), resp.end(), 0);
+    if (!resp.empty()) resp[0] = status;
+    for (size_t i = 0; i < response.size() && i + 2 < resp.size(); ++i) resp[i + 2] = response[i];
+  }
+
+  // Finishes the commands whose file work the worker has done (ESC thread; called before a
+  // command object is read and whenever the mailbox is idle).
+  void complete_jobs() {
+    if (!writer->has_results()) return;
+    using Job = ParameterWriter::Job;
+    if (auto r = writer->take(Job::Store)) {
+      if (!r->ok) load_report = r->report;
+      complete(0xFBF2, r->ok ? cmd::kStatusDoneNoResponse : cmd::kStatusError);
+    }
+    if (auto r = writer->take(Job::Checksum)) {
+      complete(0xFBF3, r->ok ? cmd::kStatusDoneWithResponse : cmd::kStatusError, r->bytes);
+    }
+    if (auto r = writer->take(Job::Load)) {
+      std::string why = r->ok ? refuse(r->stored ? r->bytes : default_payload) : r->report;
+      load_report = why.empty() ? r->report : why;
+      if (!why.empty()) {
+        complete(0xFBF4, cmd::kStatusError);
+      } else {
+        params->apply(r->stored ? r->bytes : default_payload);
+        image->compile();
+        complete(0xFBF4, cmd::kStatusDoneNoResponse);
+        notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
+      }
+    }
+    if (auto r = writer->take(Job::Reset)) {
+      if (!r->ok) {
+        load_report = r->report;
+        complete(0xFBF0, cmd::kStatusError);
+      } else {
+        power_on_reset(*r);  // every object, 0xFBF0 included, back to power-on values
+        notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
+        notify([&](CycleListener& l) { l.on_device_reset(*self, reset_factory); });
+      }
+    }
   }
 
   void clear_latched() {
@@ -162,17 +212,6 @@ struct Device::Impl {
     auto cmd = obj.bytes(1);
     std::fill(cmd.begin(), cmd.end(), 0);
     std::copy_n(def.begin(), std::min(cmd.size(), def.size()), cmd.begin());
-  }
-
-  // Sets status "error" on a command object whose execution failed (the write is refused).
-  AbortCode fail_command(uint16_t index) {
-    if (Object* o = od.find(index)) {
-      o->set_u(2, cmd::kStatusError);
-      auto resp = o->bytes(3);
-      std::fill(resp.begin(), resp.end(), 0);
-      if (!resp.empty()) resp[0] = cmd::kStatusError;
-    }
-    return AbortCode::CannotTransfer;
   }
 
   // Wraps the builder's byte-sequence check of a command object with `execute`, run once the
@@ -295,27 +334,18 @@ void Device::Impl::install_hooks() {
     restore_command(obj);
   };
 
-  // 0xFBF0 device / factory reset.
+  // 0xFBF0 device / factory reset. The worker deletes (factory) and reads back the stored
+  // file; complete_jobs() then resets every object and tells the listeners (the adapter
+  // restarts the ESC side once the master has read the answer).
   command_hooks(
       0xFBF0,
       [this](std::span<const uint8_t> c) {
-        writer->wait_idle();
-        pending.factory = c[5] == cmd::kFactoryReset;
-        if (pending.factory) {
-          std::string error;
-          if (!store->remove(error)) {
-            load_report = error;
-            return fail_command(0xFBF0);
-          }
-        }
+        reset_factory = c[5] == cmd::kFactoryReset;
+        writer->submit_reset(params->fingerprint(), reset_factory);
+        pending.status = cmd::kStatusExecuting;
         return AbortCode::None;
       },
-      [this](Object&) {
-        const bool factory = pending.factory;
-        power_on_reset();  // every object, 0xFBF0 included, back to power-on values
-        notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
-        notify([&](CycleListener& l) { l.on_device_reset(*self, factory); });
-      });
+      [this](Object& obj) { finish_command(obj); });
   // 0xFBF1 exception reset.
   command_hooks(
       0xFBF1, [](std::span<const uint8_t>) { return AbortCode::None; },
@@ -329,61 +359,35 @@ void Device::Impl::install_hooks() {
   command_hooks(
       0xFBF2,
       [this](std::span<const uint8_t>) {
-        writer->submit(params->fingerprint(), params->capture());
+        writer->submit_store(params->fingerprint(), params->capture());
         pending.status = cmd::kStatusExecuting;
         return AbortCode::None;
       },
       [this](Object& obj) { finish_command(obj); });
-  od.find(0xFBF2)->hooks.before_read = [this](Object& obj, int) {
-    if (obj.get_u(2) != cmd::kStatusExecuting || writer->busy()) return;
-    const auto error = writer->last_error();
-    if (error) load_report = *error;
-    const uint8_t status = error ? cmd::kStatusError : cmd::kStatusDoneNoResponse;
-    obj.set_u(2, status);
-    obj.bytes(3)[0] = status;
-  };
-  // 0xFBF3 checksum over the parameters as stored at the time of the command.
+  // 0xFBF3 checksum over the parameters as stored once the commands before it are done
+  // (the shipped defaults when nothing valid is stored), computed by the worker.
   command_hooks(
       0xFBF3,
       [this](std::span<const uint8_t> c) {
-        writer->wait_idle();
-        const std::vector<uint8_t> payload = stored_payload();
         const uint8_t algo = c[0] == cmd::kChecksumDefault ? cmd::kChecksumMd5 : c[0];
-        if (algo == cmd::kChecksumCrc32) {
-          const uint32_t crc = static_cast<uint32_t>(
-              ::crc32(::crc32(0L, Z_NULL, 0), payload.data(), static_cast<uInt>(payload.size())));
-          pending.response = {static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8),
-                              static_cast<uint8_t>(crc >> 16), static_cast<uint8_t>(crc >> 24)};
-        } else {
-          pending.response = digest(algo == cmd::kChecksumMd5 ? EVP_md5() : EVP_sha1(), payload);
-        }
-        pending.status = cmd::kStatusDoneWithResponse;
+        writer->submit_checksum(params->fingerprint(), algo, default_payload);
+        pending.status = cmd::kStatusExecuting;
         return AbortCode::None;
       },
       [this](Object& obj) { finish_command(obj); });
-  // 0xFBF4 load: the stored file, or the shipped defaults when nothing is stored.
+  // 0xFBF4 load: the stored file, or the shipped defaults when nothing is stored; read by the
+  // worker, checked and applied by complete_jobs().
   command_hooks(
       0xFBF4,
       [this](std::span<const uint8_t>) {
-        writer->wait_idle();
-        std::string detail;
-        const auto r = store->load(params->fingerprint(), pending.payload, detail);
-        load_report = detail;
-        if (r == ParameterStore::LoadResult::Missing) {
-          pending.payload = default_payload;
-        } else if (r != ParameterStore::LoadResult::Loaded ||
-                   pending.payload.size() != params->payload_bytes()) {
-          return fail_command(0xFBF4);
-        }
-        pending.status = cmd::kStatusDoneNoResponse;
+        writer->submit_load(params->fingerprint());
+        pending.status = cmd::kStatusExecuting;
         return AbortCode::None;
       },
-      [this](Object& obj) {
-        params->apply(pending.payload);
-        image->compile();
-        finish_command(obj);
-        notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
-      });
+      [this](Object& obj) { finish_command(obj); });
+  for (uint16_t index : {0xFBF0, 0xFBF2, 0xFBF3, 0xFBF4}) {
+    od.find(index)->hooks.before_read = [this](Object&, int) { complete_jobs(); };
+  }
 }
 
 Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_unique<Impl>()) {
@@ -394,8 +398,11 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   build_object_dictionary(d.config, d.od);
   d.params = std::make_unique<ParameterSet>(d.od, d.config);
   d.default_payload = d.params->capture();
-  d.state_dir = options.state_dir.empty() ? default_state_dir() : std::move(options.state_dir);
-  d.store = std::make_unique<ParameterStore>(d.state_dir + "/parameters.bin");
+  d.dir = options.state ? std::move(options.state)
+                        : StateDirectory::open(options.state_dir.empty() ? default_state_dir()
+                                                                         : options.state_dir);
+  d.state_dir = d.dir->path();
+  d.store = std::make_unique<ParameterStore>(d.dir);
   d.writer = std::make_unique<ParameterWriter>(*d.store);
   d.image = std::make_unique<coe::ProcessImage>(d.od);
   d.install_hooks();
@@ -429,6 +436,7 @@ size_t Device::handle_mailbox(std::span<const uint8_t> request, std::span<uint8_
 }
 
 size_t Device::poll_mailbox(std::span<uint8_t> reply) {
+  impl_->complete_jobs();
   return impl_->sdo->poll(reply);
 }
 

@@ -54,8 +54,12 @@ class CycleListener {
   virtual void on_device_reset(Device&, bool /*factory*/) {}
 };
 
+class StateDirectory;
+
 struct DeviceOptions {
-  // Where 0xFBF2 stores parameters; empty = default_state_dir().
+  // Where 0xFBF2 stores parameters: an open state directory (state_directory.hpp), else the
+  // directory `state_dir` (empty = default_state_dir()), opened with the caller's rights.
+  std::shared_ptr<StateDirectory> state;
   std::string state_dir;
   // Load the stored parameter file at construction (a corrupt or foreign file is reported
   // through load_report() and ignored).
@@ -90,7 +94,9 @@ class Device {
   // --- Mailbox (ETG.1000.4 §5.5, ETG.1000.6 §5.6): a complete mailbox request including the
   // 6-byte mailbox header; writes at most reply.size() bytes and returns the reply length or 0.
   size_t handle_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply);
-  // Unsolicited messages (CoE Emergency) when SM1 is free; 0 when nothing is pending.
+  // Unsolicited messages (CoE Emergency) when SM1 is free; 0 when nothing is pending. Also
+  // where command objects whose file work has finished on the worker (0xFBF0, 0xFBF2..0xFBF4)
+  // complete, so call it regularly (the ESC does, whenever the mailbox is idle).
   size_t poll_mailbox(std::span<uint8_t> reply);
   // Queue a CoE Emergency (ETG.1000.6 §5.6.4): error code (CiA-style, e.g. 0x4210), error
   // register (0x1001 style bits) and 5 manufacturer bytes ([0] RIM, [1] module, [2] event bit,

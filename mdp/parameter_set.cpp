@@ -2,13 +2,16 @@
 
 #include <zlib.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 
 #include "coe/bits.hpp"
+#include "coe/entry_check.hpp"
 
 namespace rackcat::mdp {
 
-ParameterSet::ParameterSet(coe::ObjectDictionary& od, const RackConfig& config) {
+ParameterSet::ParameterSet(coe::ObjectDictionary& od, const RackConfig& config) : od_(&od) {
   auto add = [&](uint16_t index, uint8_t sub) {
     coe::Object* o = od.find(index);
     const coe::Entry* e = o ? o->entry(sub) : nullptr;
@@ -82,6 +85,61 @@ bool ParameterSet::apply(std::span<const uint8_t> payload) const {
     at += r.bytes;
   }
   return true;
+}
+
+std::string ParameterSet::check(std::span<const uint8_t> payload) const {
+  if (payload.size() != payload_bytes_) {
+    return fmt::format("{} bytes of parameters where this rack has {}", payload.size(),
+                       payload_bytes_);
+  }
+  // Object by object: the candidate image with every stored entry of the object in place, each
+  // entry checked against it (paired limits see their partner's new value), then the object's
+  // hook as for a complete access writing the whole candidate (ETG.1000.6 §5.6.2.1).
+  size_t at = 0;
+  size_t i = 0;
+  std::vector<uint8_t> candidate;
+  std::vector<uint8_t> value;
+  while (i < refs_.size()) {
+    const coe::Object& obj = *refs_[i].object;
+    const auto image = obj.image();
+    candidate.assign(image.begin(), image.end());
+    size_t end = i;
+    size_t end_at = at;
+    for (; end < refs_.size() && refs_[end].object == &obj; ++end) {
+      const Ref& r = refs_[end];
+      const coe::Entry& e = *obj.entry(r.subindex);
+      value.assign(e.byte_length(), 0);
+      if (r.raw) {
+        std::copy_n(payload.begin() + static_cast<long>(end_at), value.size(), value.begin());
+      } else {
+        coe::put_le(value.data(), std::min<size_t>(value.size(), 8),
+                    coe::get_le(payload.data() + end_at, std::min<size_t>(r.bytes, 8)));
+      }
+      coe::copy_bits(candidate.data(), e.bit_offset, value.data(), 0, e.bit_length);
+      end_at += r.bytes;
+    }
+    for (size_t k = i; k < end; ++k) {
+      const Ref& r = refs_[k];
+      const coe::Entry& e = *obj.entry(r.subindex);
+      value.assign(e.byte_length(), 0);
+      coe::copy_bits(value.data(), 0, candidate.data(), e.bit_offset, e.bit_length);
+      if (const auto rc = coe::check_value(*od_, obj, e, value, candidate);
+          rc != coe::AbortCode::None) {
+        return fmt::format("0x{:04X}:{:02X} refused as an SDO write would be (abort 0x{:08X})",
+                           obj.index(), r.subindex, static_cast<uint32_t>(rc));
+      }
+    }
+    if (obj.hooks.validate_write) {
+      if (const auto rc = obj.hooks.validate_write(obj, -1, candidate, coe::EsmState::PreOp);
+          rc != coe::AbortCode::None) {
+        return fmt::format("0x{:04X} refused as an SDO write would be (abort 0x{:08X})",
+                           obj.index(), static_cast<uint32_t>(rc));
+      }
+    }
+    i = end;
+    at = end_at;
+  }
+  return {};
 }
 
 }  // namespace rackcat::mdp

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "coe/object_dictionary.hpp"
@@ -25,6 +26,11 @@ class ParameterSet {
   std::vector<uint8_t> capture() const;
   // False (and nothing changed) when the payload does not have this set's size.
   bool apply(std::span<const uint8_t> payload) const;
+  // The checks an SDO write of the same values must pass (value range, enumerations, the
+  // objects' own validate_write hooks, as a complete access in PREOP), so that a stored file
+  // can never give the device a value the master could not have written. Empty when the
+  // payload passes; else one line naming the first refused entry and its SDO abort code.
+  std::string check(std::span<const uint8_t> payload) const;
 
  private:
   struct Ref {
@@ -33,6 +39,7 @@ class ParameterSet {
     uint16_t bytes;
     bool raw;  // byte-aligned whole bytes: copied as is; else an integer via get_u/set_u
   };
+  const coe::ObjectDictionary* od_;
   std::vector<Ref> refs_;
   uint32_t fingerprint_ = 0;
   size_t payload_bytes_ = 0;

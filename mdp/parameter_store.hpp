@@ -1,6 +1,8 @@
 // The stored-parameter file behind 0xFBF2 (store), 0xFBF4 (load), 0xFBF3 (checksum) and 0xFBF0
-// (factory reset). One file, replaced atomically and durably (temporary file, fsync, rename,
-// fsync of the directory), so a crash at any point leaves either the old or the new file.
+// (factory reset): "parameters.bin" in the slave's state directory, reached only through the
+// directory's descriptor (state_directory.hpp: no symlink followed, regular files only, size
+// cap). Replaced atomically and durably, so a crash at any point leaves either the old or the
+// new file.
 //
 // Layout (little-endian): "RACKCATP" (8 bytes), format version u32 (1), fingerprint u32,
 // payload length u32, payload, CRC-32 (zlib) u32 over everything before it. The fingerprint
@@ -9,23 +11,32 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
+
+#include "mdp/state_directory.hpp"
 
 namespace rackcat::mdp {
 
 class ParameterStore {
  public:
   enum class LoadResult { Loaded, Missing, Corrupt, Foreign };
+  static constexpr const char* kFileName = "parameters.bin";
+  // Far above any rack's parameter set (a few KiB); a larger file is refused unread.
+  static constexpr size_t kMaxFileBytes = 1 << 20;
 
-  explicit ParameterStore(std::string path) : path_(std::move(path)) {}
-  const std::string& path() const { return path_; }
+  explicit ParameterStore(std::shared_ptr<const StateDirectory> dir);
+  // For tests and tools: the directory `dir` (created if missing).
+  explicit ParameterStore(const std::string& dir);
+  std::string path() const { return dir_->path() + "/" + kFileName; }
+  const StateDirectory& directory() const { return *dir_; }
 
-  // Replaces the file (creating its directory, mode 0700). False with `error` on failure; the
-  // previous file is then unchanged.
+  // Replaces the file. False with `error` on failure; the previous file is then unchanged.
   bool save(uint32_t fingerprint, std::span<const uint8_t> payload, std::string& error) const;
-  // Reads and checks the file; `payload` is filled only for Loaded. `detail` says why not.
+  // Reads and checks the file; `payload` is filled only for Loaded. `detail` says why not
+  // (never quoting the file's content). A symlink, directory, FIFO or oversized file is Corrupt.
   LoadResult load(uint32_t fingerprint, std::vector<uint8_t>& payload, std::string& detail) const;
   // Deletes the file durably (factory reset). Missing is success.
   bool remove(std::string& error) const;
@@ -33,7 +44,7 @@ class ParameterStore {
   static std::vector<uint8_t> encode(uint32_t fingerprint, std::span<const uint8_t> payload);
 
  private:
-  std::string path_;
+  std::shared_ptr<const StateDirectory> dir_;
 };
 
 }  // namespace rackcat::mdp

@@ -1,6 +1,34 @@
 #include "mdp/parameter_writer.hpp"
 
+#include <openssl/evp.h>
+#include <zlib.h>
+
+#include <algorithm>
+
+#include "mdp/command_bytes.hpp"
+
 namespace rackcat::mdp {
+namespace {
+
+std::vector<uint8_t> digest(uint8_t algorithm, const std::vector<uint8_t>& data) {
+  if (algorithm == cmd::kChecksumCrc32) {
+    const auto crc = static_cast<uint32_t>(
+        ::crc32(::crc32(0L, Z_NULL, 0), data.data(), static_cast<uInt>(data.size())));
+    return {static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8),
+            static_cast<uint8_t>(crc >> 16), static_cast<uint8_t>(crc >> 24)};
+  }
+  const EVP_MD* md = algorithm == cmd::kChecksumSha1 ? EVP_sha1() : EVP_md5();
+  unsigned char out[EVP_MAX_MD_SIZE];
+  unsigned int len = 0;
+  EVP_Digest(data.data(), data.size(), out, &len, md, nullptr);
+  return std::vector<uint8_t>(out, out + len);
+}
+
+size_t slot_of(ParameterWriter::Job job) {
+  return static_cast<size_t>(job);
+}
+
+}  // namespace
 
 ParameterWriter::ParameterWriter(const ParameterStore& store)
     : store_(store), thread_([this] { run(); }) {}
@@ -14,46 +42,124 @@ ParameterWriter::~ParameterWriter() {
   thread_.join();
 }
 
-void ParameterWriter::submit(uint32_t fingerprint, std::vector<uint8_t> payload) {
+void ParameterWriter::submit(Job job, Request request) {
   {
     std::lock_guard lock(mutex_);
-    fingerprint_ = fingerprint;
-    payload_ = std::move(payload);
-    has_job_ = true;
+    Slot& s = slots_[slot_of(job)];
+    s.request = std::move(request);
+    if (s.result) results_.fetch_sub(1, std::memory_order_acq_rel);
+    s.result.reset();
+    if (!s.queued) {
+      s.queued = true;
+      order_.push_back(job);
+    }
   }
   cv_.notify_all();
 }
 
-bool ParameterWriter::busy() const {
-  std::lock_guard lock(mutex_);
-  return has_job_ || writing_;
+void ParameterWriter::submit_store(uint32_t fingerprint, std::vector<uint8_t> payload) {
+  Request r;
+  r.fingerprint = fingerprint;
+  r.payload = std::move(payload);
+  submit(Job::Store, std::move(r));
 }
 
-std::optional<std::string> ParameterWriter::last_error() const {
+void ParameterWriter::submit_checksum(uint32_t fingerprint, uint8_t algorithm,
+                                      std::vector<uint8_t> defaults) {
+  Request r;
+  r.fingerprint = fingerprint;
+  r.payload = std::move(defaults);
+  r.algorithm = algorithm;
+  submit(Job::Checksum, std::move(r));
+}
+
+void ParameterWriter::submit_load(uint32_t fingerprint) {
+  Request r;
+  r.fingerprint = fingerprint;
+  submit(Job::Load, std::move(r));
+}
+
+void ParameterWriter::submit_reset(uint32_t fingerprint, bool factory) {
+  Request r;
+  r.fingerprint = fingerprint;
+  r.factory = factory;
+  submit(Job::Reset, std::move(r));
+}
+
+std::optional<ParameterWriter::Result> ParameterWriter::take(Job job) {
   std::lock_guard lock(mutex_);
-  return error_;
+  Slot& s = slots_[slot_of(job)];
+  if (s.queued || s.running || !s.result) return std::nullopt;
+  std::optional<Result> r = std::move(s.result);
+  s.result.reset();
+  results_.fetch_sub(1, std::memory_order_acq_rel);
+  return r;
+}
+
+bool ParameterWriter::busy(Job job) const {
+  std::lock_guard lock(mutex_);
+  const Slot& s = slots_[slot_of(job)];
+  return s.queued || s.running;
 }
 
 void ParameterWriter::wait_idle() {
   std::unique_lock lock(mutex_);
-  cv_.wait(lock, [this] { return !has_job_ && !writing_; });
+  cv_.wait(lock, [this] {
+    return order_.empty() &&
+           std::none_of(slots_.begin(), slots_.end(), [](const Slot& s) { return s.running; });
+  });
+}
+
+ParameterWriter::Result ParameterWriter::execute(Job job, const Request& r) const {
+  Result out;
+  switch (job) {
+    case Job::Store:
+      out.ok = store_.save(r.fingerprint, r.payload, out.report);
+      break;
+    case Job::Checksum: {
+      std::vector<uint8_t> payload;
+      std::string detail;
+      const bool stored =
+          store_.load(r.fingerprint, payload, detail) == ParameterStore::LoadResult::Loaded;
+      out.bytes = digest(r.algorithm, stored ? payload : r.payload);
+      out.ok = true;
+      break;
+    }
+    case Job::Reset:
+      if (r.factory && !store_.remove(out.report)) break;
+      [[fallthrough]];
+    case Job::Load: {
+      const auto loaded = store_.load(r.fingerprint, out.bytes, out.report);
+      out.stored = loaded == ParameterStore::LoadResult::Loaded;
+      // Load: a damaged or foreign file is an error; nothing stored means the shipped defaults.
+      // Reset: always succeeds once the file is deleted (factory); a bad file means defaults.
+      out.ok = out.stored || loaded == ParameterStore::LoadResult::Missing || job == Job::Reset;
+      break;
+    }
+  }
+  return out;
 }
 
 void ParameterWriter::run() {
   std::unique_lock lock(mutex_);
   for (;;) {
-    cv_.wait(lock, [this] { return stop_ || has_job_; });
-    if (!has_job_) return;  // stop requested and nothing pending
-    const uint32_t fingerprint = fingerprint_;
-    const std::vector<uint8_t> payload = std::move(payload_);
-    has_job_ = false;
-    writing_ = true;
+    cv_.wait(lock, [this] { return stop_ || !order_.empty(); });
+    if (order_.empty()) return;  // stop requested and nothing queued
+    const Job job = order_.front();
+    order_.pop_front();
+    Slot& s = slots_[slot_of(job)];
+    const Request request = std::move(s.request);
+    s.queued = false;
+    s.running = true;
     lock.unlock();
-    std::string error;
-    const bool ok = store_.save(fingerprint, payload, error);
+    Result result = execute(job, request);
     lock.lock();
-    writing_ = false;
-    error_ = ok ? std::nullopt : std::optional<std::string>(error);
+    s.running = false;
+    // A newer request of the same kind queued meanwhile supersedes this result.
+    if (!s.queued) {
+      if (!s.result) results_.fetch_add(1, std::memory_order_acq_rel);
+      s.result = std::move(result);
+    }
     cv_.notify_all();
   }
 }

@@ -1,13 +1,22 @@
-// Runs 0xFBF2 stores off the ESC thread. A store is a write, two fsyncs and a rename: several
-// milliseconds on a real disk, long enough for SOEM (2 ms frame timeout) to lose the frames the
-// blocked ESC thread could not answer. So the SDO write returns at once with status 255 "command
-// is executing" (ETG.5003.1 command status) and this worker writes the snapshot; the master
-// polls subindex 2 until it reads 0 (done) or 2 (error). Stores submitted while one is running
-// are coalesced: the latest snapshot is the one that ends up on disk.
+// Runs every file operation of the command objects off the ESC thread: 0xFBF2 store, 0xFBF3
+// checksum, 0xFBF4 load and 0xFBF0 reset (the factory reset deletes the file, both resets read
+// it back). A store is a write, two fsyncs and a rename: several milliseconds on a real disk,
+// long enough for SOEM (2 ms frame timeout) to lose the frames a blocked ESC thread could not
+// answer; a read of a planted file could block or take long too. So each SDO write returns at
+// once with status 255 "command is executing" (ETG.5003.1 command status) and this worker does
+// the file work; the ESC thread takes the result with take() and finishes the command (status
+// 0/1 done, 2 error) while the master polls subindex 2.
+//
+// Jobs run in the order they were submitted (a checksum after a store sums what was stored);
+// a job submitted again while still queued replaces its own earlier request (the latest store
+// snapshot is the one that ends up on disk).
 #pragma once
 
+#include <array>
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -20,32 +29,63 @@ namespace rackcat::mdp {
 
 class ParameterWriter {
  public:
+  enum class Job : uint8_t { Store, Checksum, Load, Reset };
+  static constexpr size_t kJobs = 4;
+
+  struct Result {
+    bool ok = false;
+    std::string report;          // one line: why not ok, or what was loaded (no file content)
+    std::vector<uint8_t> bytes;  // Checksum: the digest; Load/Reset: the stored payload
+    bool stored = false;         // Load/Reset: a valid file was read (else: none stored)
+  };
+
   explicit ParameterWriter(const ParameterStore& store);
-  // Writes what is still pending, then stops.
+  // Finishes what is queued, then stops.
   ~ParameterWriter();
   ParameterWriter(const ParameterWriter&) = delete;
   ParameterWriter& operator=(const ParameterWriter&) = delete;
 
-  void submit(uint32_t fingerprint, std::vector<uint8_t> payload);
-  // True while a submitted store has not reached the disk.
-  bool busy() const;
-  // Result of the last completed store; empty = success.
-  std::optional<std::string> last_error() const;
-  // Blocks until nothing is pending (0xFBF3/0xFBF4/0xFBF0 act on what is stored).
+  void submit_store(uint32_t fingerprint, std::vector<uint8_t> payload);
+  // `algorithm`: 0xFBF3 bit (CRC-32 0x02, MD5 0x04, SHA-1 0x08) over the stored payload, or
+  // over `defaults` when nothing valid is stored.
+  void submit_checksum(uint32_t fingerprint, uint8_t algorithm, std::vector<uint8_t> defaults);
+  void submit_load(uint32_t fingerprint);
+  void submit_reset(uint32_t fingerprint, bool factory);
+
+  // The result of `job` once it has finished, taken once; nullopt while it is queued or
+  // running, or when none was submitted.
+  std::optional<Result> take(Job job);
+  // True when some finished result waits to be taken (one atomic load: cheap to ask every cycle).
+  bool has_results() const { return results_.load(std::memory_order_acquire) != 0; }
+  // True while `job` is queued or running.
+  bool busy(Job job) const;
+  // Blocks until nothing is queued or running (tests, shutdown).
   void wait_idle();
 
  private:
+  struct Request {
+    uint32_t fingerprint = 0;
+    std::vector<uint8_t> payload;  // Store: the snapshot; Checksum: the defaults
+    uint8_t algorithm = 0;
+    bool factory = false;
+  };
+  struct Slot {
+    bool queued = false;
+    bool running = false;
+    Request request;
+    std::optional<Result> result;
+  };
+  void submit(Job job, Request request);
+  Result execute(Job job, const Request& r) const;
   void run();
 
   const ParameterStore& store_;
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   bool stop_ = false;
-  bool has_job_ = false;
-  bool writing_ = false;
-  uint32_t fingerprint_ = 0;
-  std::vector<uint8_t> payload_;
-  std::optional<std::string> error_;
+  std::deque<Job> order_;
+  std::array<Slot, kJobs> slots_;
+  std::atomic<unsigned> results_{0};  // results set and not yet taken
   std::thread thread_;
 };
 

@@ -15,11 +15,26 @@
 
 namespace rackcat::mdp {
 
+namespace {
+// An error line stays one short line whatever the file holds: a problem that quotes a huge
+// value is cut, and control characters (a value's own line breaks) become '?'.
+std::string bounded(std::string text) {
+  constexpr size_t kMax = 200;
+  if (text.size() > kMax) {
+    text = text.substr(0, kMax) + "... (" + std::to_string(text.size()) + " bytes)";
+  }
+  for (char& c : text) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) c = '?';
+  }
+  return text;
+}
+}  // namespace
+
 ConfigError::ConfigError(std::string file, int line, std::string problem)
-    : std::runtime_error(file + ":" + std::to_string(line) + ": " + problem),
+    : std::runtime_error(bounded(file) + ":" + std::to_string(line) + ": " + bounded(problem)),
       file_(std::move(file)),
       line_(line),
-      problem_(std::move(problem)) {}
+      problem_(bounded(std::move(problem))) {}
 
 namespace {
 

@@ -45,16 +45,23 @@ class Commands : public ::testing::Test {
     device->state_changed(EsmState::Init, EsmState::PreOp);
   }
   void go(EsmState to) { device->state_changed(device->state(), to); }
-  // 0xFBF2 answers at once with status 255 (executing); the store finishes on a worker thread.
-  uint64_t wait_store() {
+  // 0xFBF0, 0xFBF2, 0xFBF3 and 0xFBF4 answer at once with status 255 (executing); the file work
+  // finishes on a worker thread and the status changes when the master polls subindex 2.
+  uint64_t wait_command(uint16_t index) {
     // Bounded only so a broken worker fails the test instead of hanging it.
     const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    uint64_t status = sdo->read_u(0xFBF2, 2);
+    uint64_t status = sdo->read_u(index, 2);
     while (status == 255 && std::chrono::steady_clock::now() < give_up) {
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
-      status = sdo->read_u(0xFBF2, 2);
+      status = sdo->read_u(index, 2);
     }
     return status;
+  }
+  uint64_t wait_store() { return wait_command(0xFBF2); }
+  // Writes command `bytes` to `index`:01 and waits for the worker; returns the final status.
+  uint64_t command(uint16_t index, const std::vector<uint8_t>& bytes) {
+    EXPECT_EQ(sdo->download(index, 1, bytes), 0u) << std::hex << index;
+    return wait_command(index);
   }
   std::vector<uint8_t> read(uint16_t index, uint8_t sub) {
     std::vector<uint8_t> d;
@@ -97,6 +104,7 @@ TEST_F(Commands, StoreFailureIsReportedInTheStatus) {
   // The state directory is a file: the store cannot create it.
   sdo.reset();
   device.reset();
+  std::filesystem::remove_all(dir);  // created by the device at start
   std::filesystem::create_directories(std::filesystem::path(dir).parent_path());
   { std::ofstream(dir) << "not a directory"; }
   DeviceOptions opt;
@@ -133,6 +141,7 @@ TEST_F(Commands, CompleteAccessWriteBackOfACommandObjectExecutesNothing) {
   ASSERT_EQ(sdo->upload(0xFBF0, 0, image, true), 0u);
   std::copy(kDeviceReset.begin(), kDeviceReset.end(), image.begin() + 2);
   EXPECT_EQ(sdo->download(0xFBF0, 0, image, true), 0u);
+  EXPECT_EQ(wait_command(0xFBF0), 0u);
   EXPECT_EQ(l.resets, 1);
   EXPECT_EQ(sdo->read_text(0x2000, 0x04), "192.168.9.50");
   device->remove_listener(&l);
@@ -156,15 +165,15 @@ TEST_F(Commands, LoadRevertsToTheStoredSetAndFactoryResetToShippedDefaults) {
   ASSERT_EQ(sdo->write_text(0x2000, 0x04, "10.0.0.8"), 0u);
   ASSERT_EQ(sdo->download(0xFBF2, 1, kStore), 0u);
   ASSERT_EQ(sdo->write_text(0x2000, 0x04, "10.0.0.9"), 0u);
-  ASSERT_EQ(sdo->download(0xFBF4, 1, kLoad), 0u);
+  ASSERT_EQ(command(0xFBF4, kLoad), 0u);
   EXPECT_EQ(sdo->read_text(0x2000, 0x04), "10.0.0.8");
   // Device reset: stored parameters stay, settings return to power-on values.
   ASSERT_EQ(sdo->write_text(0x2000, 0x04, "10.0.0.10"), 0u);
-  ASSERT_EQ(sdo->download(0xFBF0, 1, kDeviceReset), 0u);
+  ASSERT_EQ(command(0xFBF0, kDeviceReset), 0u);
   EXPECT_EQ(sdo->read_text(0x2000, 0x04), "10.0.0.8");
   EXPECT_TRUE(std::filesystem::exists(device->parameter_file()));
   // Factory reset: the stored set is gone, the rack file's value is back, also after a restart.
-  ASSERT_EQ(sdo->download(0xFBF0, 1, kFactoryReset), 0u);
+  ASSERT_EQ(command(0xFBF0, kFactoryReset), 0u);
   EXPECT_EQ(sdo->read_text(0x2000, 0x04), "192.168.9.50");
   EXPECT_FALSE(std::filesystem::exists(device->parameter_file()));
   restart();
@@ -181,7 +190,7 @@ TEST_F(Commands, DeviceResetIsReportedToListeners) {
     }
   } l;
   device->add_listener(&l);
-  ASSERT_EQ(sdo->download(0xFBF0, 1, kDeviceReset), 0u);
+  ASSERT_EQ(command(0xFBF0, kDeviceReset), 0u);
   EXPECT_EQ(l.resets, 1);
   EXPECT_FALSE(l.factory);
   device->remove_listener(&l);
@@ -203,8 +212,7 @@ TEST_F(Commands, ChecksumsCoverTheParametersAsStored) {
   const std::vector<uint8_t> payload = stored_payload(device->parameter_file());
   EXPECT_EQ(read(0xFBF3, 1), (std::vector<uint8_t>{0x0F, 0, 0, 0}));
 
-  ASSERT_EQ(sdo->download(0xFBF3, 1, std::vector<uint8_t>{0x02, 0, 0, 0}), 0u);  // CRC-32
-  EXPECT_EQ(sdo->read_u(0xFBF3, 2), 1u);  // completed, reply there
+  EXPECT_EQ(command(0xFBF3, {0x02, 0, 0, 0}), 1u);  // CRC-32: completed, reply there
   std::vector<uint8_t> resp = read(0xFBF3, 3);
   ASSERT_EQ(resp.size(), 22u);
   EXPECT_EQ(resp[0], 1);
@@ -215,7 +223,7 @@ TEST_F(Commands, ChecksumsCoverTheParametersAsStored) {
 
   for (auto [bit, md] : {std::pair{uint8_t{0x04}, EVP_md5()}, std::pair{uint8_t{0x08}, EVP_sha1()},
                          std::pair{uint8_t{0x01}, EVP_md5()}}) {
-    ASSERT_EQ(sdo->download(0xFBF3, 1, std::vector<uint8_t>{bit, 0, 0, 0}), 0u);
+    ASSERT_EQ(command(0xFBF3, {bit, 0, 0, 0}), 1u);
     unsigned char want[EVP_MAX_MD_SIZE];
     unsigned int len = 0;
     EVP_Digest(payload.data(), payload.size(), want, &len, md, nullptr);
@@ -260,8 +268,7 @@ TEST_F(Commands, CorruptOrForeignFilesAreReportedAndIgnored) {
   restart();
   EXPECT_EQ(sdo->read_text(0x2000, 0x04), "192.168.9.50");
   EXPECT_NE(device->load_report().find("corrupt"), std::string::npos) << device->load_report();
-  EXPECT_EQ(sdo->download(0xFBF4, 1, kLoad), 0x08000020u);  // cannot load a corrupt file
-  EXPECT_EQ(sdo->read_u(0xFBF4, 2), 2u);                    // last command completed, error
+  EXPECT_EQ(command(0xFBF4, kLoad), 2u);  // cannot load a corrupt file: completed, error
   {
     std::ofstream f(file, std::ios::binary | std::ios::trunc);
     f << "something else entirely";
@@ -270,7 +277,7 @@ TEST_F(Commands, CorruptOrForeignFilesAreReportedAndIgnored) {
   EXPECT_NE(device->load_report().find("foreign"), std::string::npos) << device->load_report();
   // A file for another rack (other fingerprint) is foreign too.
   std::string error;
-  ASSERT_TRUE(ParameterStore(file).save(0x12345678, std::vector<uint8_t>(10, 0), error)) << error;
+  ASSERT_TRUE(ParameterStore(dir).save(0x12345678, std::vector<uint8_t>(10, 0), error)) << error;
   restart();
   EXPECT_NE(device->load_report().find("foreign"), std::string::npos) << device->load_report();
   EXPECT_EQ(sdo->read_text(0x2000, 0x04), "192.168.9.50");

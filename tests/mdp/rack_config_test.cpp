@@ -185,3 +185,21 @@ TEST(RackConfig, AddressValidators) {
 
 }  // namespace
 }  // namespace rackcat::mdp
+
+namespace rackcat::mdp {
+namespace {
+
+TEST(RackConfig, AnErrorQuotingAHugeValueIsStillOneShortLine) {
+  // Issue 14 item 8: a 50 MB string gave a 52 MB error line. 5 MB (with a line break in it)
+  // shows the bound as well and parses faster.
+  std::string huge(5 << 20, 'x');
+  huge[1000] = '\n';
+  const std::string err =
+      error_of(std::string(kHeader) + "      - slot: 1\n        card: \"" + huge + "\"\n");
+  EXPECT_LT(err.size(), 600u);
+  EXPECT_EQ(err.find('\n'), std::string::npos);
+  EXPECT_EQ(err.rfind("rack.yaml:", 0), 0u) << err.substr(0, 200);
+}
+
+}  // namespace
+}  // namespace rackcat::mdp

@@ -33,7 +33,7 @@ void kill_after(pid_t child, std::mt19937& rng) {
 TEST(StoreCrash, KilledWhileStoringLeavesTheOldOrTheNewSet) {
   const std::string dir = ::testing::TempDir() + "/mdp_store_crash";
   std::filesystem::remove_all(dir);
-  const ParameterStore store(dir + "/parameters.bin");
+  const ParameterStore store(dir);
   const uint32_t fp = 0xC0FFEE;
   const auto a = pattern(0xA5, 8192);
   const auto b = pattern(0x5A, 8192);
