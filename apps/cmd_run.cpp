@@ -3,11 +3,15 @@
 //   rackcat run --iface IFACE [--config FILE] [--slaves N] [--busy-poll] [--pcap FILE]
 //               [--state-dir DIR] [--control-port P] [--user USER] [--rim-bus can:IFACE]
 //
-// Opens the raw socket (needs CAP_NET_RAW), drops every privilege, builds N racks from the
-// configuration (each its own ESC, object dictionary, drivers and stored parameters), starts
-// slave 0's control API on 127.0.0.1 and the UART pseudo-terminals, and runs until SIGINT or
-// SIGTERM, then exits 0. A bad configuration is one line "FILE:LINE: problem" and exit 2; a
-// missing interface or permission is one line and exit 2.
+// Parses the rack file, opens the raw socket (needs CAP_NET_RAW) and the capture file, drops
+// every privilege while the process still has a single thread (capabilities are per thread),
+// then, as the unprivileged user, opens the state directory and builds N racks from the
+// configuration (each its own ESC, object dictionary, drivers, stored parameters and
+// parameter worker thread; channel sources read their files now), starts the control API on
+// 127.0.0.1 and the UART pseudo-terminals, and runs until SIGINT or SIGTERM, then exits 0. A
+// bad configuration is one line "FILE:LINE: problem" and exit 2 (a bad channel source is
+// found once the racks are built, after the interface is opened); a missing interface or
+// permission is one line and exit 2.
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -20,6 +24,7 @@
 #include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
 #include "mdp/rack_config.hpp"
+#include "mdp/state_directory.hpp"
 #include "modules/canopen/socketcan.hpp"
 #include "modules/control/control_api.hpp"
 #include "modules/rim/threaded_link.hpp"
@@ -47,24 +52,30 @@ int run(const RunArgs& a) {
   const std::string state_dir = a.state_dir.empty() ? mdp::default_state_dir() : a.state_dir;
   const auto config = load_rack_or_report(a.config);
   if (!config) return ecat::kExitUsage;
-  racks.reserve(static_cast<size_t>(a.slaves));
-  try {
-    // Channel sources of the rack file are parsed by the drivers: their errors are
-    // configuration errors too (FILE:LINE).
-    for (int i = 0; i < a.slaves; ++i) {
-      racks.push_back(std::make_unique<RackSlave>(*config, state_dir, i));
-    }
-  } catch (const mdp::ConfigError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return ecat::kExitUsage;
-  }
 
+  // Socket and capture file first, then the drop, before any thread exists.
   ecat::Runner runner({.interface_name = a.iface,
                        .wait = a.busy_poll ? ecat::WaitMode::BusyPoll : ecat::WaitMode::Blocking,
                        .pcap_path = a.pcap,
                        .drop_privileges = true,
                        .user = a.user});
   if (const int rc = runner.open("rackcat"); rc != 0) return rc;
+
+  // From here on everything runs as the unprivileged user: the state directory and the files
+  // channel sources name are opened with its rights.
+  const auto state = mdp::StateDirectory::open(state_dir);
+  if (!state->usable()) std::fprintf(stderr, "rackcat: %s\n", state->problem().c_str());
+  racks.reserve(static_cast<size_t>(a.slaves));
+  try {
+    // Channel sources of the rack file are parsed by the drivers: their errors are
+    // configuration errors too (FILE:LINE).
+    for (int i = 0; i < a.slaves; ++i) {
+      racks.push_back(std::make_unique<RackSlave>(*config, state, i));
+    }
+  } catch (const mdp::ConfigError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return ecat::kExitUsage;
+  }
 
   std::vector<ecat::Application*> line;
   line.reserve(racks.size());

@@ -17,9 +17,13 @@ mdp::RackConfig for_position(mdp::RackConfig config, int position) {
 }
 }  // namespace
 
-RackSlave::RackSlave(mdp::RackConfig config, const std::string& state_dir, int position) {
+RackSlave::RackSlave(mdp::RackConfig config, const std::string& state_dir, int position)
+    : RackSlave(std::move(config), mdp::StateDirectory::open(state_dir), position) {}
+
+RackSlave::RackSlave(mdp::RackConfig config, const std::shared_ptr<mdp::StateDirectory>& state_dir,
+                     int position) {
   mdp::DeviceOptions options;
-  options.state_dir = position == 0 ? state_dir : state_dir + "/slave-" + std::to_string(position);
+  options.state = position == 0 ? state_dir : state_dir->child("slave-" + std::to_string(position));
   device_ = std::make_unique<mdp::Device>(for_position(std::move(config), position), options);
   rack_ = std::make_unique<modules::Rack>(*device_);
   device_->add_listener(&reset_listener_);

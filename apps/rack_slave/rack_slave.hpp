@@ -14,6 +14,7 @@
 #include "ecat/application.hpp"
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"
+#include "mdp/state_directory.hpp"
 #include "modules/rack/rack.hpp"
 
 namespace rackcat::apps {
@@ -23,6 +24,10 @@ class RackSlave final : public ecat::Application {
   // `position` (0-based) distinguishes the slaves of a segment: it is added to the serial
   // number (0x1018:04, SII word 0x0E) and names the slave's own state directory.
   RackSlave(mdp::RackConfig config, const std::string& state_dir, int position);
+  // The same below an open state directory: slave 0 uses `state_dir` itself, slave N its
+  // subdirectory "slave-N" (mdp::StateDirectory::child: never a symlink out of it).
+  RackSlave(mdp::RackConfig config, const std::shared_ptr<mdp::StateDirectory>& state_dir,
+            int position);
   ~RackSlave() override;
 
   mdp::Device& device() { return *device_; }

@@ -1,5 +1,6 @@
 #include "ecat/host/privileges.hpp"
 
+#include <dirent.h>
 #include <grp.h>
 #include <linux/capability.h>
 #include <pwd.h>
@@ -69,9 +70,30 @@ void clear_capability_sets() {
   if (syscall(SYS_capset, &header, data) != 0) fail("capset", errno);
 }
 
+// Threads of this process (entries of /proc/self/task), or -1 when /proc cannot tell.
+int thread_count() {
+  DIR* d = ::opendir("/proc/self/task");
+  if (d == nullptr) return -1;
+  int n = 0;
+  while (const dirent* e = ::readdir(d)) {
+    if (e->d_name[0] != '.') ++n;
+  }
+  ::closedir(d);
+  return n;
+}
+
 }  // namespace
 
 PrivilegeDropResult drop_privileges(const PrivilegeDropOptions& options) {
+  // capset(2), PR_CAPBSET_DROP and PR_SET_NO_NEW_PRIVS act on the calling thread only (and
+  // glibc's setresuid covers all threads, the others do not): a thread started earlier would
+  // keep every capability. The drop is therefore only done while this is the only thread.
+  if (const int threads = thread_count(); threads != 1) {
+    throw PrivilegeError(
+        threads < 0 ? std::string("cannot drop privileges: /proc/self/task is not readable")
+                    : "cannot drop privileges: " + std::to_string(threads) +
+                          " threads are running and would keep their capabilities");
+  }
   PrivilegeDropResult result;
   result.uid = getuid();
   result.gid = getgid();

@@ -35,7 +35,10 @@ struct PrivilegeDropResult {
 };
 
 // Throws PrivilegeError (with the reason) when a requested step fails: the caller should
-// stop rather than run with more privilege than it asked to keep.
+// stop rather than run with more privilege than it asked to keep. Capabilities, the bounding
+// set and no_new_privs are per thread, so the drop must happen before the process starts any
+// thread: it throws (changing nothing) when /proc/self/task shows more than one. Every thread
+// started afterwards inherits the dropped state.
 PrivilegeDropResult drop_privileges(const PrivilegeDropOptions& options = {});
 
 // The capability sets of this process as /proc/self/status reports them (CapEff etc.).

@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <unistd.h>
+#include <condition_variable>
 #include <cstdlib>
 #include <fstream>
+#include <mutex>
 #include <string>
+#include <thread>
 
 #include "ecat/host/privileges.hpp"
 #include "ecat/host/raw_socket_link.hpp"
@@ -15,8 +18,8 @@ namespace rackcat::ecat {
 namespace {
 
 // CapEff straight from /proc/self/status, as an administrator would check it.
-uint64_t cap_eff_from_proc() {
-  std::ifstream f("/proc/self/status");
+uint64_t cap_eff_from_proc(const char* status = "/proc/self/status") {
+  std::ifstream f(status);
   std::string line;
   while (std::getline(f, line)) {
     if (line.rfind("CapEff:", 0) == 0) return std::strtoull(line.c_str() + 7, nullptr, 16);
@@ -76,6 +79,46 @@ TEST(LinkPrivileges, UnknownUserIsAnErrorAndNothingChanges) {
       return getuid() == before ? 0 : 3;
     }
     return 1;
+  });
+  EXPECT_EQ(status, 0);
+}
+
+}  // namespace
+}  // namespace rackcat::ecat
+
+namespace rackcat::ecat {
+namespace {
+
+// Issue 14 item 5: capset and the bounding-set drop act per thread; a thread started before
+// the drop kept every capability. The drop now refuses to run beside another thread.
+TEST(LinkPrivileges, RefusesToDropWhileAnotherThreadRuns) {
+  const int status = testutil::in_child([] {
+    std::mutex m;
+    std::condition_variable cv;
+    bool done = false;
+    std::thread other([&] {
+      std::unique_lock lock(m);
+      cv.wait(lock, [&] { return done; });
+    });
+    int rc = 1;
+    try {
+      drop_privileges({.user = "", .use_sudo_user = false});
+    } catch (const PrivilegeError& e) {
+      rc = std::string(e.what()).find("threads are running") != std::string::npos ? 0 : 2;
+    }
+    {
+      std::lock_guard lock(m);
+      done = true;
+    }
+    cv.notify_all();
+    other.join();
+    // Alone again, the drop works and a thread started afterwards inherits it.
+    if (rc == 0) {
+      drop_privileges({.user = "", .use_sudo_user = false});
+      std::thread after([&] { rc = cap_eff_from_proc("/proc/thread-self/status") == 0 ? 0 : 3; });
+      after.join();
+    }
+    return rc;
   });
   EXPECT_EQ(status, 0);
 }

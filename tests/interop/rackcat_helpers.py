@@ -97,7 +97,8 @@ def realtime_master():
 class Rackcat:
     """One `rackcat run` in its namespace; restart() keeps the namespace and state directory."""
 
-    def __init__(self, tmp_path, slaves, config, state_dir, pcap, extra):
+    def __init__(self, tmp_path, slaves, config, state_dir, pcap, extra, prefix=()):
+        self.prefix = list(prefix)
         self.tmp_path = tmp_path
         self.slaves = slaves
         self.config = config
@@ -118,7 +119,8 @@ class Rackcat:
         cap = self.tmp_path / f"rackcat{self.runs}.pcap" if self.pcap_enabled else None
         template = f"{RACKCAT} run --iface {{iface}} --slaves {{slaves}}"
         self.proc = SlaveProcess(self.ns, template, self.slaves, args, cap,
-                                 self.tmp_path / f"rackcat{self.runs}.log", rt_prefix())
+                                 self.tmp_path / f"rackcat{self.runs}.log",
+                                 rt_prefix() + self.prefix)
         self.proc.wait_ready(self.slaves)
         if "--no-control" not in self.extra:
             self._wait_control_api()
@@ -216,10 +218,10 @@ def rackcat(tmp_path):
     require_rackcat()
     started = []
 
-    def start(slaves=1, config=None, state_dir=None, pcap=True, extra=()):
+    def start(slaves=1, config=None, state_dir=None, pcap=True, extra=(), prefix=()):
         sub = tmp_path / f"run{len(started)}"
         sub.mkdir()
-        r = Rackcat(sub, slaves, config, state_dir, pcap, extra)
+        r = Rackcat(sub, slaves, config, state_dir, pcap, extra, prefix)
         started.append(r)
         return r
 

@@ -9,6 +9,7 @@ import pwd
 import socket
 import struct
 import subprocess
+import tempfile
 import time
 from pathlib import Path
 
@@ -168,3 +169,85 @@ def test_nothing_written_outside_the_state_directory(rackcat, tmp_path):
         # The store replaced the symlinks by its own plain file (rename does not follow).
         assert sorted(p.name for p in state.iterdir()) == ["parameters.bin"]
         assert not (state / "parameters.bin").is_symlink()
+
+
+# --- issue 14 item 5: the privilege drop covers every thread ---------------------------------
+
+def _every_task(pid):
+    """/proc/PID/task/*/status of every thread of the process."""
+    tasks = {}
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        fields = {}
+        for line in (task / "status").read_text().splitlines():
+            key, _, value = line.partition(":")
+            fields[key] = value.strip()
+        tasks[task.name] = fields
+    return tasks
+
+
+def _state_for(user, tmp_path, mode=0o700):
+    """A state directory `user` can reach (pytest's own directories are root's, mode 0700)."""
+    base = Path(tempfile.mkdtemp(prefix="rackcat-sec-"))
+    base.chmod(0o755)
+    state = base / "state"
+    state.mkdir()
+    if user is not None:
+        os.chown(state, user.pw_uid, user.pw_gid)
+    state.chmod(mode)
+    (tmp_path / "state-link").symlink_to(base)  # removed with tmp_path; base by the test
+    return state
+
+
+def _check_tasks(pid, uid, min_threads, bounding=True):
+    tasks = _every_task(pid)
+    # Parameter workers (one per slave), the control API and the UART pseudo-terminals run
+    # beside the device thread: all of them must show the drop.
+    assert len(tasks) >= min_threads, f"only {len(tasks)} threads: {sorted(tasks)}"
+    for tid, st in tasks.items():
+        # Without CAP_SETPCAP (started unprivileged) the bounding set cannot be emptied;
+        # NoNewPrivs then keeps execve from gaining anything.
+        for key in ("CapEff", "CapPrm", "CapInh", "CapAmb") + (("CapBnd",) if bounding else ()):
+            assert int(st[key], 16) == 0, f"task {tid} ({st['Name']}): {key} = {st[key]}"
+        assert st["NoNewPrivs"] == "1", f"task {tid} ({st['Name']}): NoNewPrivs {st['NoNewPrivs']}"
+        assert st["Uid"].split() == [str(uid)] * 4, f"task {tid}: Uid {st['Uid']}"
+    return len(tasks)
+
+
+def test_every_thread_drops_privileges_as_root_with_user(rackcat, tmp_path):
+    nobody = pwd.getpwnam("nobody")
+    state = _state_for(nobody, tmp_path)
+    rc = rackcat(slaves=3, pcap=False, state_dir=state, extra=("--user", "nobody"))
+    _check_tasks(rc.proc.proc.pid, nobody.pw_uid, min_threads=5)
+    rc.stop()
+
+
+def test_every_thread_drops_cap_net_raw_when_started_unprivileged(rackcat, tmp_path):
+    # Started as nobody with CAP_NET_RAW only (inheritable + ambient, as a service manager's
+    # AmbientCapabilities= would): once the socket is open no thread keeps it.
+    nobody = pwd.getpwnam("nobody")
+    state = _state_for(nobody, tmp_path)
+    prefix = ["setpriv", f"--reuid={nobody.pw_uid}", f"--regid={nobody.pw_gid}",
+              "--clear-groups", "--inh-caps=+net_raw", "--ambient-caps=+net_raw"]
+    rc = rackcat(slaves=2, pcap=False, state_dir=state, prefix=prefix)
+    _check_tasks(rc.proc.proc.pid, nobody.pw_uid, min_threads=3, bounding=False)
+    master = open_master(rc.iface, 2)  # the socket opened before the drop still works
+    try:
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    rc.stop()
+
+
+def test_store_into_a_root_owned_read_only_state_directory_fails(rackcat, tmp_path):
+    # Item 5: the writer thread kept root's capabilities and stored into a mode-0500 root
+    # directory. As nobody the store must fail (status 2) and leave the directory empty.
+    state = _state_for(None, tmp_path, 0o500)  # root's, r-x for root only
+    rc = rackcat(pcap=False, state_dir=state, extra=("--user", "nobody", "--no-control"))
+    master = open_master(rc.iface, 1)
+    try:
+        assert store_parameters(master.slaves[0]) == 2
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    rc.stop()
+    assert list(state.iterdir()) == []
