@@ -249,6 +249,11 @@ def render(results, not_run):
             lines.append(f"| {step} | " + " | ".join(row) + " |")
         secs = [f"{m} {results[(m, rack)]['seconds']} s" for m in cols]
         lines += ["", f"Driver run time: {', '.join(secs)}.", ""]
+        retried = [f"{m} ({_short(n, 200)})" for m in cols for n in results[(m, rack)]["notes"]
+                   if n.startswith("first run missed")]
+        if retried:
+            lines += ["Run twice (the first run missed the baseline; the second is shown): " +
+                      "; ".join(retried), ""]
     versions = sorted({(m, results[k]["version"]) for k in results for m in [k[0]]})
     lines += ["Versions: " + ", ".join(v for _, v in versions) + ".", ""]
     if bugs:

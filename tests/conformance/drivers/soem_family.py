@@ -15,6 +15,9 @@ RECEIVE_TIMEOUT_US = 20_000
 class Api:
     """pysoem's spelling; the soemx driver overrides what it spells differently."""
 
+    # objects whose entry descriptions are compared (None: all; pysoem reads them all anyway)
+    entries_of = None
+
     def __init__(self, lib):
         self.lib = lib
 
@@ -26,7 +29,7 @@ class Api:
         od = {}
         for obj in s0.od:
             entries = {}
-            if obj.index in wanted_entries:
+            if wanted_entries is None or obj.index in wanted_entries:
                 entries = {k: (_text(e.name), e.data_type, e.bit_length)
                            for k, e in enumerate(obj.entries) if e.name}
             od[obj.index] = (_text(obj.name), entries)
@@ -123,7 +126,7 @@ def scenario(m, rec, exp, api):
     od = {}
 
     def od_list():
-        od.update(api.od(s0, (0x1018, 0x2000, 0x1C12)))
+        od.update(api.od(s0, api.entries_of))
         return check_od_list(list(od), exp)
 
     rec.run("sdo_info_list", od_list, pre)

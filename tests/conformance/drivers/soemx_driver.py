@@ -9,6 +9,7 @@ from soem_family import Api, run
 
 
 class SoemxApi(Api):
+    entries_of = (0x1018, 0x2000, 0x1C12)  # one SDO information exchange per entry list
     def state_check(self, m, state, timeout_us):
         return m.state_check(state, 0, timeout_us)
 
@@ -16,7 +17,7 @@ class SoemxApi(Api):
         od = {}
         for obj in s0.sdo_info():
             entries = {}
-            if obj["index"] in wanted_entries:
+            if wanted_entries is None or obj["index"] in wanted_entries:
                 entries = {e["subindex"]: (e["name"].decode(), e["data_type"], e["bit_length"])
                            for e in s0.sdo_entries(obj["index"]) if e["name"]}
             od[obj["index"]] = (obj["name"].decode(), entries)
