@@ -38,6 +38,21 @@ class Api:
     def pump_emergencies(self, m):
         pass
 
+    def drain_errors(self, m, s0):
+        """SOEM keeps an error for every subindex gap it met reading the entry descriptions;
+        pysoem raises them one per later call ("unexpected error, Etype: 4"). Returns how
+        many were drained."""
+        n = 0
+        for _ in range(256):
+            try:
+                s0.sdo_read(0x1018, 1)
+                return n
+            except Exception as e:  # noqa: BLE001 - pysoem raises a bare Exception here
+                if "Etype: 4" not in str(e):
+                    raise
+                n += 1
+        return n
+
     def dc_readback(self, m):
         return "no register read-back in this API"
 
@@ -123,22 +138,28 @@ def scenario(m, rec, exp, api):
         return "0x06020000, 0x06010002"
 
     rec.run("sdo_abort", aborts, pre)
-    od = {}
-
-    def od_list():
-        od.update(api.od(s0, api.entries_of))
-        return check_od_list(list(od), exp)
-
-    rec.run("sdo_info_list", od_list, pre)
-    # SOEM keeps EC_MAXNAME = 40 characters of a name (ec_coe.h)
-    rec.run("sdo_info_desc", lambda: check_descriptions(od, exp, name_limit=40),
-            ("sdo_info_list",))
-
     def mapping():
         m.config_map()
         return check_sizes([(len(s.output), len(s.input)) for s in m.slaves], exp)
 
     rec.run("pdo_sizes", mapping, pre)
+
+    # SDO information after the mapping: SOEM reads every subindex up to MaxSub and keeps an
+    # error for each gap, which rackcat rightly answers with an SDO information error
+    # (0x06090011); pysoem's config_map then fails on any error SOEM kept ("unexpected error").
+    od = {}
+
+    def od_list():
+        od.update(api.od(s0, api.entries_of))
+        text = check_od_list(list(od), exp)
+        kept = api.drain_errors(m, s0)
+        return text + (f"; {kept} SDO information errors for subindex gaps drained" if kept
+                       else "")
+
+    rec.run("sdo_info_list", od_list, pre)
+    # SOEM keeps EC_MAXNAME = 40 characters of a name (ec_coe.h)
+    rec.run("sdo_info_desc", lambda: check_descriptions(od, exp, name_limit=40),
+            ("sdo_info_list",))
 
     def dc():
         check(m.config_dc(), "config_dc: no slave with a distributed clock")

@@ -23,6 +23,9 @@ class SoemxApi(Api):
             od[obj["index"]] = (obj["name"].decode(), entries)
         return od
 
+    def drain_errors(self, m, s0):
+        return len(m.errors())
+
     def pump_emergencies(self, m):
         # soemx hands Emergencies to the callbacks when SOEM's error list is read
         m.errors()
