@@ -54,6 +54,9 @@ RULES = {
     "tests/apps": MDP + ["ecat/", "esi/", "modules/", "apps/rack_slave/", "tests/"],
     "tests/can_vm": MDP + ["modules/", "tests/can_vm/"],
     "tests/support": BASE + ["tests/support/"],
+    "tests/install": COE,
+    # The out-of-tree example device uses the installed generic layers only.
+    "examples": COE + ["esi/", "ecat/"],
     "bench/coe": COE + ["tests/coe/"],
     "bench/mdp": MDP + ["tests/mdp/"],
     "bench/esi": MDP + ["esi/", "tests/esi/"],

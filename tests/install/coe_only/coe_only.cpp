@@ -1,0 +1,34 @@
+// Uses the installed CoE layer alone: one object, one SDO upload of it (ETG.1000.6 §5.6.2.2,
+// expedited upload of 0x1000:00 through a complete mailbox frame). Exit 0 when the reply
+// carries the value.
+#include <array>
+#include <cstdio>
+
+#include "coe/access.hpp"
+#include "coe/data_type.hpp"
+#include "coe/object_dictionary.hpp"
+#include "coe/sdo_server.hpp"
+
+int main() {
+  using namespace rackcat;
+  coe::ObjectDictionary od;
+  coe::Object o(0x1000, coe::ObjectCode::Var, "Device type",
+                static_cast<uint16_t>(coe::DataType::Unsigned32));
+  o.add(coe::make_entry(0, "Device type", coe::DataType::Unsigned32, 32, coe::access::kRo,
+                        {0x91, 0x01, 0x0F, 0x00}));
+  od.add(std::move(o));
+  coe::SdoServer sdo(od);
+  // Mailbox header (length 10, type 3 CoE, counter 1), CoE header (SDO request), upload
+  // initiate 0x40 of 0x1000:00.
+  const std::array<uint8_t, 16> request{10,   0,    0,    0,    0, 0x13, 0x00, 0x20,
+                                        0x40, 0x00, 0x10, 0x00, 0, 0,    0,    0};
+  std::array<uint8_t, 128> reply{};
+  const size_t n = sdo.handle(request, reply, coe::EsmState::PreOp);
+  if (n < 16 || reply[12] != 0x91 || reply[13] != 0x01 || reply[14] != 0x0F) {
+    std::fprintf(stderr, "coe_only: unexpected SDO reply (%zu bytes)\n", n);
+    return 1;
+  }
+  std::printf("coe_only: 0x1000:00 = 0x%02x%02x%02x%02x\n", reply[15], reply[14], reply[13],
+              reply[12]);
+  return 0;
+}
