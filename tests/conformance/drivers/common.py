@@ -72,7 +72,8 @@ def check_expedited_download(read, write, exp):
     write(0x2000, 9, struct.pack("<I", 0x0000FF0F))
     got = read(0x2000, 9)
     write(0x2000, 9, bytes(old))
-    check(u32(got) == 0x0000FF0F, f"0x2000:09 read back {bytes(got).hex()} after writing 0f ff 00 00")
+    check(u32(got) == 0x0000FF0F,
+          f"0x2000:09 read back {bytes(got).hex()} after writing 0f ff 00 00")
     check(bytes(read(0x2000, 9)) == bytes(old), "0x2000:09 not restored")
     return "0x2000:09 written, read back, restored"
 

@@ -15,9 +15,8 @@ import time
 
 from ebpfcat.ethercat import ECCmd, EtherCat, EtherCatError, MachineState, Packet, Terminal
 
-from common import (LRW_WKC_PER_SLAVE, LoopbackRun, NotOffered, Recorder, check,
-                    check_descriptions, check_expedited_download, check_expedited_uploads,
-                    check_identity, check_normal_download, check_normal_upload,
+from common import (LoopbackRun, NotOffered, Recorder, check, check_descriptions,
+                    check_expedited_uploads, check_identity, check_normal_upload,
                     check_od_list, check_sii_words, check_sizes, parse_args)
 
 LOGICAL_BASE = 0x10000
@@ -281,7 +280,8 @@ async def scenario(iface, rec, exp):
                 bad.append((c, wkc))
             elif c % hold == hold - 1:
                 for i, (base, out_b, in_b) in enumerate(layout):
-                    ins = bytes(image[base - LOGICAL_BASE + out_b:base - LOGICAL_BASE + out_b + in_b])
+                    first = base - LOGICAL_BASE + out_b
+                    ins = bytes(image[first:first + in_b])
                     for k, lp in enumerate(exp["loops"]):
                         want = run.pattern(block, i, k, lp["bits"])
                         got = _get(ins, lp)

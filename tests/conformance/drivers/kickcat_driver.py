@@ -13,7 +13,7 @@ import kickcat
 from kickcat import State
 from kickcat.mailbox.request import MessageStatus
 
-from common import (LRW_WKC_PER_SLAVE, LoopbackRun, NotOffered, Recorder, check,
+from common import (LRW_WKC_PER_SLAVE, LoopbackRun, Recorder, check,
                     check_complete_access, check_descriptions, check_expedited_download,
                     check_expedited_uploads, check_normal_download, check_normal_upload,
                     check_segmented_upload, check_sizes, parse_args, run_isolated)

@@ -10,7 +10,7 @@ import time
 import numpy as np
 from pyecm.soem import SOEM
 
-from common import (LRW_WKC_PER_SLAVE, LoopbackRun, NotOffered, Recorder, check,  # noqa: F401
+from common import (LRW_WKC_PER_SLAVE, LoopbackRun, Recorder, check,
                     check_complete_access, check_expedited_download, check_expedited_uploads,
                     check_identity, check_normal_download, check_normal_upload,
                     check_segmented_upload, check_sizes, parse_args, trigger, while_cycling)
@@ -31,7 +31,8 @@ class SdoFailed(Exception):
     def __init__(self, what, errors):
         self.abort_codes = [e.AbortCode & 0xFFFFFFFF for e in errors
                             if e.Etype.name.endswith(EC_ERR_TYPE_SDO_ERROR)]
-        super().__init__(f"{what}: SOEM errors {[(e.Etype.name, hex(e.AbortCode & 0xFFFFFFFF)) for e in errors]}")
+        kept = [(e.Etype.name, hex(e.AbortCode & 0xFFFFFFFF)) for e in errors]
+        super().__init__(f"{what}: SOEM errors {kept}")
 
 
 def main():
