@@ -5,12 +5,16 @@
 #include <httplib.h>
 
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "apps/commands.hpp"
+#include "mdp/device.hpp"
+#include "mdp/state_directory.hpp"
 #include "modules/control/control_api.hpp"
 
 namespace rackcat::apps {
@@ -19,7 +23,10 @@ namespace {
 using json = nlohmann::json;
 
 struct CtlOptions {
-  int port = modules::kDefaultControlPort;
+  int port = 0;  // 0: the port `rackcat run` recorded in the state directory, else 8765
+  std::string state_dir;
+  std::string token_file;
+  int slave = 0;
   bool json_output = false;
   int module = 0;
   int channel = 0;
@@ -44,18 +51,56 @@ struct CtlOptions {
   std::string cts;
 };
 
-[[noreturn]] void request(const CtlOptions& o, const std::string& method, const std::string& path,
-                          const json& body, void (*print)(const json&) = nullptr) {
-  httplib::Client cli("127.0.0.1", o.port);
+// The first line of a small file below the state directory (no symlink followed), or "".
+std::string first_line(const std::string& dir, const char* name) {
+  const auto state = mdp::StateDirectory::open(dir);
+  std::vector<uint8_t> bytes;
+  std::string why;
+  if (state->read(name, 4096, bytes, why) != mdp::StateDirectory::ReadResult::Ok) return {};
+  std::string text(bytes.begin(), bytes.end());
+  return text.substr(0, text.find('\n'));
+}
+
+std::string read_token_file(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+[[noreturn]] void request(const CtlOptions& o, const std::string& method,
+                          const std::string& api_path, const json& body,
+                          void (*print)(const json&) = nullptr) {
+  // The rack's secret and port: where `rackcat run` wrote them (docs/MODULES.md "Control API").
+  const std::string dir = o.state_dir.empty() ? mdp::default_state_dir() : o.state_dir;
+  int port = o.port;
+  if (port == 0) {
+    const std::string recorded = first_line(dir, modules::kPortFileName);
+    port = recorded.empty() ? modules::kDefaultControlPort : std::atoi(recorded.c_str());
+  }
+  const std::string token = o.token_file.empty() ? first_line(dir, modules::kTokenFileName)
+                                                 : read_token_file(o.token_file);
+  if (token.empty()) {
+    std::fprintf(stderr,
+                 "rackcat ctl: no control token in %s; give --state-dir (as for `rackcat "
+                 "run`) or --token-file\n",
+                 o.token_file.empty() ? (dir + "/" + modules::kTokenFileName).c_str()
+                                      : o.token_file.c_str());
+    exit_with(2);
+  }
+  const std::string path =
+      o.slave == 0 ? api_path : "/api/slaves/" + std::to_string(o.slave) + api_path.substr(4);
+  httplib::Client cli("127.0.0.1", port);
   cli.set_connection_timeout(2, 0);
   cli.set_read_timeout(5, 0);
+  cli.set_bearer_token_auth(token.c_str());
   auto res = method == "GET" ? cli.Get(path.c_str())
                              : cli.Post(path.c_str(), body.dump(), "application/json");
   if (!res) {
     std::fprintf(stderr,
                  "rackcat ctl: no rack answers on 127.0.0.1:%d (%s); is `rackcat run` running "
                  "with its control API?\n",
-                 o.port, httplib::to_string(res.error()).c_str());
+                 port, httplib::to_string(res.error()).c_str());
     exit_with(1);
   }
   const json answer = json::parse(res->body, nullptr, false);
@@ -130,7 +175,13 @@ void add_ctl(CLI::App& app) {
   auto o = std::make_shared<CtlOptions>();
   CLI::App* ctl = app.add_subcommand(
       "ctl", "inspect a running rack and inject faults through its control API (127.0.0.1)");
-  ctl->add_option("--port", o->port, "control API port")->capture_default_str();
+  ctl->add_option("--port", o->port,
+                  "control API port (default: the one `rackcat run` recorded, else 8765)");
+  ctl->add_option("--state-dir", o->state_dir,
+                  "state directory of the rack (default $XDG_STATE_HOME/rackcat): its "
+                  "control-token and control-port files");
+  ctl->add_option("--token-file", o->token_file, "read the control token from this file");
+  ctl->add_option("--slave", o->slave, "slave of the segment (0-based)")->check(CLI::Range(0, 255));
   ctl->require_subcommand(1);
 
   CLI::App* list = ctl->add_subcommand("list", "RIMs, modules and channels with live values");

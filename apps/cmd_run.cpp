@@ -23,6 +23,7 @@
 #include "apps/rack_slave/rack_slave.hpp"
 #include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
+#include "mdp/file_root.hpp"
 #include "mdp/rack_config.hpp"
 #include "mdp/state_directory.hpp"
 #include "modules/canopen/socketcan.hpp"
@@ -43,7 +44,8 @@ struct RunArgs {
   bool no_control = false;
   bool no_ptys = false;
   std::string user;
-  std::string rim_bus;  // "can:IFACE": RIMs are CANopen nodes on that bus (docs/CAN.md)
+  std::string data_dir;  // replay files named by control-API requests are read below it
+  std::string rim_bus;   // "can:IFACE": RIMs are CANopen nodes on that bus (docs/CAN.md)
 };
 
 int run(const RunArgs& a) {
@@ -106,19 +108,47 @@ int run(const RunArgs& a) {
               cfg.rims.size(), cfg.modules.size());
   std::printf("rackcat: state directory %s; %s\n", state_dir.c_str(),
               racks.front()->device().load_report().c_str());
+  for (size_t i = 1; i < racks.size(); ++i) {
+    std::printf("rackcat: slave %zu: %s\n", i, racks[i]->device().load_report().c_str());
+  }
   if (!a.no_ptys) racks.front()->rack().start_uart_ptys();
-  // The control API of slave 0's rack; destroyed (its HTTP thread stopped) before the racks.
-  std::optional<modules::ControlApi> control;
+  // The control API of every slave (docs/MODULES.md "Control API"): a fresh secret in the state
+  // directory (mode 0600, this user's), the port exclusively ours, and where ctl finds both.
+  std::unique_ptr<modules::ControlApi> api;
   if (!a.no_control) {
+    modules::ControlApiOptions options;
     try {
-      control.emplace(racks.front()->rack(),
-                      [&runner](std::function<void()> f) { runner.loop().post(std::move(f)); });
-      const uint16_t port = control->listen(static_cast<uint16_t>(a.control_port));
-      std::printf("rackcat: control API on http://127.0.0.1:%u\n", port);
+      options.token = modules::ControlApi::new_token();
+      if (!a.data_dir.empty()) options.data = mdp::FileRoot::open(a.data_dir);
     } catch (const std::exception& e) {
-      control.reset();
-      std::fprintf(stderr, "rackcat: control API not started: %s\n", e.what());
+      std::fprintf(stderr, "rackcat: --data-dir: %s\n", e.what());
+      return ecat::kExitUsage;
     }
+    std::vector<modules::Rack*> all;
+    for (auto& r : racks) all.push_back(&r->rack());
+    api = std::make_unique<modules::ControlApi>(
+        all, [&runner](std::function<void()> f) { runner.loop().post(std::move(f)); }, options);
+    uint16_t port = 0;
+    try {
+      port = api->listen(static_cast<uint16_t>(a.control_port));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "rackcat: %s (is another rackcat running?)\n", e.what());
+      return ecat::kExitUsage;
+    }
+    std::string error;
+    const std::string token_line = options.token + "\n";
+    const std::string port_line = std::to_string(port) + "\n";
+    if (!state->replace(modules::kTokenFileName,
+                        {reinterpret_cast<const uint8_t*>(token_line.data()), token_line.size()},
+                        0600, error) ||
+        !state->replace(modules::kPortFileName,
+                        {reinterpret_cast<const uint8_t*>(port_line.data()), port_line.size()},
+                        0644, error)) {
+      std::fprintf(stderr, "rackcat: control API not started: %s\n", error.c_str());
+      return ecat::kExitUsage;
+    }
+    std::printf("rackcat: control API on http://127.0.0.1:%u (token in %s/%s)\n", port,
+                state_dir.c_str(), modules::kTokenFileName);
   }
   // RIMs on a CAN bus (docs/CAN.md): slave 0's rack follows their heartbeats and PDOs.
   std::unique_ptr<modules::canopen::ThreadedRimLink> rim_link;
@@ -161,6 +191,8 @@ void add_run(CLI::App& app) {
                   "control API port on 127.0.0.1 (0 = any free port)")
       ->check(CLI::Range(0, 65535));
   cmd->add_flag("--no-control", args->no_control, "do not start the control API");
+  cmd->add_option("--data-dir", args->data_dir,
+                  "directory below which the control API reads replay files (default: none)");
   cmd->add_flag("--no-pty", args->no_ptys, "do not create UART pseudo-terminals");
   cmd->add_option("--user", args->user, "user to run as once the socket is open");
   cmd->add_option("--rim-bus", args->rim_bus,

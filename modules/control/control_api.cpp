@@ -1,13 +1,17 @@
 #include "modules/control/control_api.hpp"
 
 #include <fmt/format.h>
-#include <httplib.h>
+#include <sys/random.h>
 
+#include <cerrno>
 #include <chrono>
-#include <future>
+#include <condition_variable>
+#include <mutex>
 #include <stdexcept>
 
+#include "mdp/file_root.hpp"
 #include "modules/cards/uart_driver.hpp"
+#include "modules/signals/source_factory.hpp"
 
 namespace rackcat::modules {
 namespace {
@@ -258,41 +262,267 @@ std::vector<uint8_t> parse_hex(const std::string& s) {
 }  // namespace
 
 ControlApi::ControlApi(Rack& rack, PostFn post)
-    : rack_(rack), post_(std::move(post)), alive_(std::make_shared<std::atomic<bool>>(true)) {}
+    : ControlApi(std::vector<Rack*>{&rack}, std::move(post), ControlApiOptions{}) {}
+
+ControlApi::ControlApi(std::vector<Rack*> racks, PostFn post, ControlApiOptions options)
+    : racks_(std::move(racks)),
+      post_(std::move(post)),
+      options_(std::move(options)),
+      alive_(std::make_shared<std::atomic<bool>>(true)) {}
 
 ControlApi::~ControlApi() {
   stop();
 }
 
+std::string ControlApi::new_token() {
+  uint8_t bytes[16];
+  size_t got = 0;
+  while (got < sizeof bytes) {
+    const ssize_t n = ::getrandom(bytes + got, sizeof bytes - got, 0);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw std::runtime_error("getrandom failed");
+    got += static_cast<size_t>(n);
+  }
+  std::string hex;
+  for (uint8_t b : bytes) hex += fmt::format("{:02x}", b);
+  return hex;
+}
+
+// --- the HTTP side -----------------------------------------------------------------------
+
+namespace {
+
+HttpResponse json_response(int status, const json& body) {
+  HttpResponse r;
+  r.status = status;
+  r.body = body.dump(2) + "\n";
+  return r;
+}
+
+HttpResponse refuse(int status, const std::string& reason) {
+  return json_response(status, {{"error", reason}});
+}
+
+// Constant time in the length of `expected`: the comparison does not tell how much matched.
+bool same_secret(std::string_view given, std::string_view expected) {
+  if (expected.empty()) return false;
+  unsigned diff = given.size() == expected.size() ? 0u : 1u;
+  for (size_t i = 0; i < expected.size(); ++i) {
+    diff |= static_cast<unsigned>(static_cast<uint8_t>(i < given.size() ? given[i] : 0) ^
+                                  static_cast<uint8_t>(expected[i]));
+  }
+  return diff == 0;
+}
+
+}  // namespace
+
+std::optional<HttpResponse> ControlApi::check_head(const HttpRequest& req) const {
+  const std::string port = std::to_string(port_);
+  // DNS rebinding: a page of attacker.example that resolves to 127.0.0.1 still sends its own
+  // name in Host (RFC 9110 §7.2).
+  const auto host = req.header("host");
+  if (!host || (*host != "127.0.0.1:" + port && *host != "localhost:" + port)) {
+    return refuse(403, "Host must be 127.0.0.1:" + port + " or localhost:" + port);
+  }
+  // A browser names the page's origin on every cross-origin request (RFC 6454 §7).
+  if (const auto origin = req.header("origin")) {
+    if (*origin != "http://127.0.0.1:" + port && *origin != "http://localhost:" + port) {
+      return refuse(403, "cross-origin requests are not accepted");
+    }
+  }
+  // The per-run secret. (A browser session for a served page would add a second accepted
+  // credential here: an HttpOnly, SameSite=Strict cookie set from a one-time login URL.)
+  const auto auth = req.header("authorization");
+  constexpr std::string_view kBearer = "Bearer ";
+  if (!auth || auth->substr(0, kBearer.size()) != kBearer ||
+      !same_secret(auth->substr(kBearer.size()), options_.token)) {
+    HttpResponse r = refuse(401, "missing or wrong token (Authorization: Bearer, see " +
+                                     std::string(kTokenFileName) + " in the state directory)");
+    r.headers.emplace_back("WWW-Authenticate", "Bearer");
+    return r;
+  }
+  if (req.method != "GET" && req.method != "POST") {
+    HttpResponse r = refuse(405, "only GET and POST are accepted");
+    r.headers.emplace_back("Allow", "GET, POST");
+    return r;
+  }
+  if (req.method == "POST") {
+    const auto type = req.header("content-type");
+    const std::string_view t = type ? type->substr(0, type->find(';')) : std::string_view();
+    if (t != "application/json") return refuse(415, "the body must be application/json");
+  }
+  return std::nullopt;
+}
+
+HttpResponse ControlApi::serve(const HttpRequest& req) {
+  if (auto refused = check_head(req)) return *refused;
+  const Response r = handle(req.method, req.path, req.body);
+  return json_response(r.status, r.body);
+}
+
+uint16_t ControlApi::listen(uint16_t port) {
+  if (options_.token.size() < 32) {
+    throw std::runtime_error("control API: no token (128 bits or more) to authenticate with");
+  }
+  server_ = std::make_unique<HttpServer>(
+      options_.limits, [this](const HttpRequest& r) { return check_head(r); },
+      [this](const HttpRequest& r) { return serve(r); });
+  try {
+    port_ = port;  // the head check needs it from the first request on
+    port_ = server_->listen(port);
+  } catch (const std::runtime_error& e) {
+    server_.reset();
+    throw std::runtime_error(std::string("control API: ") + e.what());
+  }
+  return port_;
+}
+
+void ControlApi::stop() {
+  alive_->store(false);
+  if (server_) server_->stop();
+  server_.reset();
+}
+
+// --- requests ------------------------------------------------------------------------------
+
 ControlApi::Response ControlApi::handle(std::string_view method, std::string_view path,
                                         std::string_view body) {
-  json parsed = json::object();
-  if (!body.empty()) {
-    parsed = json::parse(body, nullptr, false);
-    if (parsed.is_discarded()) return {400, {{"error", "the request body is not valid JSON"}}};
-  }
+  Prepared p;
   try {
-    return dispatch(method, path, parsed);
+    p = prepare(method, path, body);
   } catch (const std::invalid_argument& e) {
     return {400, {{"error", printable(e.what())}}};
   } catch (const std::exception& e) {
     return {500, {{"error", printable(e.what())}}};
   }
+  if (p.answer) return *p.answer;
+  return execute(std::move(p.command));
 }
 
-ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_view path,
-                                          const json& body) {
+ControlApi::Response ControlApi::execute(Command command) {
+  auto guarded = [command = std::move(command)]() -> Response {
+    try {
+      return command();
+    } catch (const std::invalid_argument& e) {
+      return {400, {{"error", printable(e.what())}}};
+    } catch (const std::exception& e) {
+      return {500, {{"error", printable(e.what())}}};
+    }
+  };
+  if (!post_) return guarded();
+  // Bounded: a client cannot queue unlimited work for the device thread.
+  if (in_flight_.fetch_add(1) >= kMaxInFlight) {
+    in_flight_.fetch_sub(1);
+    return {503, {{"error", "too many requests waiting for the device thread; nothing changed"}}};
+  }
+  enum class Stage { Queued, Taken, Done, Withdrawn };
+  struct Ticket {
+    std::mutex m;
+    std::condition_variable cv;
+    Stage stage = Stage::Queued;
+    Response result;
+  };
+  auto ticket = std::make_shared<Ticket>();
+  auto alive = alive_;
+  post_([ticket, alive, guarded, this] {
+    {
+      std::lock_guard lock(ticket->m);
+      if (ticket->stage == Stage::Withdrawn || !alive->load()) {
+        ticket->stage = Stage::Withdrawn;
+        in_flight_.fetch_sub(1);
+        return;
+      }
+      ticket->stage = Stage::Taken;
+    }
+    Response r = guarded();
+    {
+      std::lock_guard lock(ticket->m);
+      ticket->result = std::move(r);
+      ticket->stage = Stage::Done;
+    }
+    in_flight_.fetch_sub(1);
+    ticket->cv.notify_all();
+  });
+  std::unique_lock lock(ticket->m);
+  if (!ticket->cv.wait_for(lock, options_.answer_timeout,
+                           [&] { return ticket->stage == Stage::Done; })) {
+    if (ticket->stage == Stage::Queued) {
+      ticket->stage = Stage::Withdrawn;  // the device thread will skip it
+      return {503,
+              {{"error",
+                "the device thread did not take the request in time; it was withdrawn "
+                "and nothing changed"}}};
+    }
+    // Taken: it is being applied now; its real result follows within a cycle.
+    ticket->cv.wait(lock, [&] { return ticket->stage == Stage::Done; });
+  }
+  return ticket->result;
+}
+
+ControlApi::Prepared ControlApi::prepare(std::string_view method, std::string_view path,
+                                         std::string_view body) {
+  // /api/slaves/N/... -> slave N; /api/... -> slave 0.
+  size_t slave = 0;
+  std::string rest(path);
+  constexpr std::string_view kSlaves = "/api/slaves";
+  if (path == kSlaves) {
+    if (method != "GET") {
+      return {Response{405, {{"error", "/api/slaves does not accept " + printable(method)}}}, {}};
+    }
+    json list = json::array();
+    for (size_t i = 0; i < racks_.size(); ++i) {
+      list.push_back({{"slave", i}, {"modules", racks_[i]->drivers().size()}});
+    }
+    return {Response{200, {{"slaves", std::move(list)}}}, {}};
+  }
+  if (path.starts_with("/api/slaves/")) {
+    std::string_view tail = path.substr(kSlaves.size() + 1);
+    const size_t slash = tail.find('/');
+    const std::string_view num = tail.substr(0, slash);
+    size_t n = 0;
+    bool ok = !num.empty() && num.size() <= 3;
+    for (char c : num) {
+      ok = ok && c >= '0' && c <= '9';
+      n = n * 10 + static_cast<size_t>(c - '0');
+    }
+    if (!ok || n >= racks_.size()) {
+      return {Response{404,
+                       {{"error", fmt::format("there is no slave {} (the segment has {})",
+                                              printable(num), racks_.size())}}},
+              {}};
+    }
+    slave = n;
+    rest = "/api" + std::string(slash == std::string_view::npos ? "" : tail.substr(slash));
+  }
+  json parsed = json::object();
+  if (!body.empty()) {
+    parsed = json::parse(body, nullptr, false);
+    if (parsed.is_discarded()) {
+      return {Response{400, {{"error", "the request body is not valid JSON"}}}, {}};
+    }
+  }
+  return dispatch(*racks_[slave], method, rest, parsed);
+}
+
+ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
+                                          std::string_view path, const json& body) {
   const bool get = method == "GET";
   const bool post = method == "POST";
+  Rack* r = &rack;
+  auto answer = [](Response resp) { return Prepared{std::move(resp), {}}; };
+  auto run = [](Command c) { return Prepared{std::nullopt, std::move(c)}; };
   auto wrong_method = [&] {
-    return Response{
-        405, {{"error", fmt::format("{} does not accept {}", printable(path), printable(method))}}};
+    return answer(Response{
+        405,
+        {{"error", fmt::format("{} does not accept {}", printable(path), printable(method))}}});
   };
 
   if (path == "/api/rack") {
     if (!get) return wrong_method();
-    rack_.refresh();
-    return {200, rack_json(rack_)};
+    return run([r] {
+      r->refresh();
+      return Response{200, rack_json(*r)};
+    });
   }
   if (path.starts_with("/api/modules/")) {
     if (!get) return wrong_method();
@@ -302,23 +532,29 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
       if (c < '0' || c > '9' || n > 1000) throw BadRequest("module number must be 1..255");
       n = n * 10 + (c - '0');
     }
-    CardDriver* d = rack_.driver(static_cast<uint16_t>(n));
+    CardDriver* d = rack.driver(static_cast<uint16_t>(n));
     if (num.empty() || d == nullptr)
-      return {404, {{"error", fmt::format("there is no module {}", printable(num))}}};
-    rack_.refresh();
-    return {200, module_json(rack_, *d)};
+      return answer({404, {{"error", fmt::format("there is no module {}", printable(num))}}});
+    return run([r, d] {
+      r->refresh();
+      return Response{200, module_json(*r, *d)};
+    });
   }
   if (path == "/api/esm") {
     if (!get) return wrong_method();
-    return {200,
-            {{"state", esm_name(rack_.esm_state())},
-             {"outputs_valid", rack_.outputs_valid()},
-             {"detect_modules_override", rack_.detect_modules_override()}}};
+    return run([r] {
+      return Response{200,
+                      {{"state", esm_name(r->esm_state())},
+                       {"outputs_valid", r->outputs_valid()},
+                       {"detect_modules_override", r->detect_modules_override()}}};
+    });
   }
   if (path == "/api/exceptions") {
     if (!get) return wrong_method();
-    rack_.refresh();
-    return {200, exceptions_json(rack_)};
+    return run([r] {
+      r->refresh();
+      return Response{200, exceptions_json(*r)};
+    });
   }
   if (path == "/api/channel") {
     if (!post) return wrong_method();
@@ -338,21 +574,41 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
         for (auto it = p.begin(); it != p.end(); ++it) params[it.key()] = param_string(it.value());
       }
     }
-    rack_.set_source(module, channel, kind, params);
-    rack_.refresh();
-    return {200, module_json(rack_, *rack_.driver(module))};
+    if (rack.driver(module) == nullptr)
+      throw BadRequest(fmt::format("there is no module {}", module));
+    // A recording is read and parsed here, below --data-dir, never on the device thread.
+    auto prebuilt = std::make_shared<std::unique_ptr<Source>>();
+    if (kind == "replay") {
+      SourceContext ctx;
+      auto data = options_.data;
+      ctx.read_file = [data](const std::string& file, size_t max_bytes) -> std::string {
+        if (!data) {
+          throw std::invalid_argument("replay files are read below --data-dir, and none was given");
+        }
+        return data->read(file, max_bytes);
+      };
+      SourceParams own;
+      for (const auto& [k, v] : params) {
+        if (!is_channel_option_key(k)) own[k] = v;
+      }
+      *prebuilt = make_source(kind, own, ctx);
+    }
+    return run([r, module, channel, kind, params, prebuilt] {
+      r->set_source(module, channel, kind, params, std::move(*prebuilt));
+      r->refresh();
+      return Response{200, module_json(*r, *r->driver(module))};
+    });
   }
   if (path == "/api/rim/unplug" || path == "/api/rim/replug" || path == "/api/rim/state") {
     if (!post) return wrong_method();
     const auto rr = static_cast<uint8_t>(integer(body, "rim", 1, 5));
-    if (!rack_.rims().count(rr)) throw BadRequest(fmt::format("there is no RIM {}", rr));
+    if (!rack.rims().count(rr)) throw BadRequest(fmt::format("there is no RIM {}", rr));
+    RimState st = RimState::Online;
+    const bool comm_error = boolean(body, "comm_error", false);
     if (path == "/api/rim/unplug") {
-      rack_.set_rim_state(rr, RimState::Offline, boolean(body, "comm_error", false));
-    } else if (path == "/api/rim/replug") {
-      rack_.set_rim_state(rr, RimState::Online, false);
-    } else {
+      st = RimState::Offline;
+    } else if (path == "/api/rim/state") {
       const std::string s = text(body, "state");
-      RimState st;
       if (s == "offline")
         st = RimState::Offline;
       else if (s == "connected")
@@ -363,15 +619,18 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
         st = RimState::Error;
       else
         throw BadRequest("'state' must be offline, connected, online or error");
-      rack_.set_rim_state(rr, st, boolean(body, "comm_error", false));
     }
-    rack_.refresh();
-    return {200, exceptions_json(rack_)};
+    const bool err = path == "/api/rim/replug" ? false : comm_error;
+    return run([r, rr, st, err] {
+      r->set_rim_state(rr, st, err);
+      r->refresh();
+      return Response{200, exceptions_json(*r)};
+    });
   }
   if (path == "/api/rim/mcm") {
     if (!post) return wrong_method();
     const auto rr = static_cast<uint8_t>(integer(body, "rim", 1, 5));
-    if (!rack_.rims().count(rr)) throw BadRequest(fmt::format("there is no RIM {}", rr));
+    if (!rack.rims().count(rr)) throw BadRequest(fmt::format("there is no RIM {}", rr));
     const json& list = field(body, "errors");
     if (!list.is_array()) throw BadRequest("'errors' must be an array (possibly empty)");
     uint32_t bits = 0;
@@ -390,24 +649,33 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
             "'errors' entries are slot_machine_mcm0, sout_compare_mcm0, slot_machine_mcm1, "
             "sout_compare_mcm1");
     }
-    rack_.set_rim_mcm_errors(rr, bits);
-    rack_.refresh();
-    return {200, exceptions_json(rack_)};
+    return run([r, rr, bits] {
+      r->set_rim_mcm_errors(rr, bits);
+      r->refresh();
+      return Response{200, exceptions_json(*r)};
+    });
   }
   if (path == "/api/fan") {
     if (!post) return wrong_method();
     const auto rr = static_cast<uint8_t>(integer(body, "rim", 0, 5));
     const std::string zone = body.contains("zone") ? text(body, "zone") : std::string();
-    rack_.set_fan_rpm(rr, zone, number(body, "rpm"));
-    rack_.refresh();
-    return {200, exceptions_json(rack_)};
+    const double rpm = number(body, "rpm");
+    return run([r, rr, zone, rpm] {
+      r->set_fan_rpm(rr, zone, rpm);
+      r->refresh();
+      return Response{200, exceptions_json(*r)};
+    });
   }
   if (path == "/api/cpu_temperature") {
     if (!post) return wrong_method();
-    rack_.set_cpu_temperature(number(body, "celsius"), boolean(body, "immediate", false));
-    return {200,
-            {{"cpu_temperature", rack_.cpu_temperature()},
-             {"published", rack_.cpu_temperature_published()}}};
+    const double celsius = number(body, "celsius");
+    const bool immediate = boolean(body, "immediate", false);
+    return run([r, celsius, immediate] {
+      r->set_cpu_temperature(celsius, immediate);
+      return Response{200,
+                      {{"cpu_temperature", r->cpu_temperature()},
+                       {"published", r->cpu_temperature_published()}}};
+    });
   }
   if (path == "/api/wiring_fault") {
     if (!post) return wrong_method();
@@ -423,9 +691,11 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
       fault = WiringFault::ShortToSupply;
     else
       throw BadRequest("'fault' must be none, safe (short_to_ground) or unsafe (short_to_supply)");
-    rack_.set_wiring_fault(module, channel, fault);
-    rack_.refresh();
-    return {200, exceptions_json(rack_)};
+    return run([r, module, channel, fault] {
+      r->set_wiring_fault(module, channel, fault);
+      r->refresh();
+      return Response{200, exceptions_json(*r)};
+    });
   }
   if (path == "/api/sensor") {
     if (!post) return wrong_method();
@@ -433,16 +703,22 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
     const auto channel = static_cast<size_t>(integer(body, "channel", 0, 31));
     if (!body.contains("open") && !body.contains("loop_ohms"))
       throw BadRequest("give 'open' and/or 'loop_ohms'");
-    if (body.contains("loop_ohms")) rack_.set_loop_ohms(module, channel, number(body, "loop_ohms"));
-    if (body.contains("open")) rack_.set_sensor_open(module, channel, boolean(body, "open", false));
-    rack_.refresh();
-    return {200, module_json(rack_, *rack_.driver(module))};
+    std::optional<double> ohms;
+    std::optional<bool> open;
+    if (body.contains("loop_ohms")) ohms = number(body, "loop_ohms");
+    if (body.contains("open")) open = boolean(body, "open", false);
+    return run([r, module, channel, ohms, open] {
+      if (ohms) r->set_loop_ohms(module, channel, *ohms);
+      if (open) r->set_sensor_open(module, channel, *open);
+      r->refresh();
+      return Response{200, module_json(*r, *r->driver(module))};
+    });
   }
   if (path == "/api/uart/inject") {
     if (!post) return wrong_method();
     const auto module = static_cast<uint16_t>(integer(body, "module", 1, 255));
     const auto channel = static_cast<size_t>(integer(body, "channel", 0, 3));
-    auto* u = dynamic_cast<UartDriver*>(rack_.driver(module));
+    auto* u = dynamic_cast<UartDriver*>(rack.driver(module));
     if (u == nullptr) throw BadRequest(fmt::format("module {} is not a UART card", module));
     std::vector<uint8_t> bytes;
     if (body.contains("text")) {
@@ -471,63 +747,18 @@ ControlApi::Response ControlApi::dispatch(std::string_view method, std::string_v
     const bool cts = boolean(body, "cts", true);
     if (bytes.empty() && error_bits == 0 && !has_cts)
       throw BadRequest("give 'text', 'hex', 'error' and/or 'cts'");
-    const size_t accepted = u->inject_rx(channel, bytes.data(), bytes.size());
-    if (error_bits) u->inject_error(channel, error_bits);
-    if (has_cts) u->channel(channel).cts = cts;
-    rack_.refresh();
-    json j = module_json(rack_, *u);
-    j["accepted"] = accepted;
-    return {200, j};
+    return run([r, u, channel, bytes, error_bits, has_cts, cts] {
+      const size_t accepted = u->inject_rx(channel, bytes.data(), bytes.size());
+      if (error_bits) u->inject_error(channel, error_bits);
+      if (has_cts) u->channel(channel).cts = cts;
+      r->refresh();
+      json j = module_json(*r, *u);
+      j["accepted"] = accepted;
+      return Response{200, j};
+    });
   }
-  return {404, {{"error", fmt::format("no endpoint {} {}", printable(method), printable(path))}}};
-}
-
-uint16_t ControlApi::listen(uint16_t port) {
-  server_ = std::make_unique<httplib::Server>();
-  auto serve = [this](const httplib::Request& req, httplib::Response& res) {
-    auto promise = std::make_shared<std::promise<Response>>();
-    auto future = promise->get_future();
-    auto alive = alive_;
-    const std::string method = req.method, path = req.path, body = req.body;
-    auto task = [this, promise, alive, method, path, body] {
-      if (!alive->load()) return;
-      promise->set_value(handle(method, path, body));
-    };
-    if (post_) {
-      post_(task);
-    } else {
-      task();
-    }
-    Response r;
-    if (future.wait_for(std::chrono::seconds(2)) == std::future_status::ready) {
-      r = future.get();
-    } else {
-      r = {503, {{"error", "the device thread did not answer within 2 s"}}};
-    }
-    res.status = r.status;
-    res.set_content(r.body.dump(2) + "\n", "application/json");
-  };
-  server_->Get(R"(/.*)", serve);
-  server_->Post(R"(/.*)", serve);
-  int bound = 0;
-  if (port == 0) {
-    bound = server_->bind_to_any_port("127.0.0.1");
-  } else {
-    bound = server_->bind_to_port("127.0.0.1", port) ? port : -1;
-  }
-  if (bound <= 0) {
-    server_.reset();
-    throw std::runtime_error(fmt::format("control API: cannot listen on 127.0.0.1:{}", port));
-  }
-  thread_ = std::thread([this] { server_->listen_after_bind(); });
-  return static_cast<uint16_t>(bound);
-}
-
-void ControlApi::stop() {
-  alive_->store(false);
-  if (server_) server_->stop();
-  if (thread_.joinable()) thread_.join();
-  server_.reset();
+  return answer(
+      {404, {{"error", fmt::format("no endpoint {} {}", printable(method), printable(path))}}});
 }
 
 }  // namespace rackcat::modules

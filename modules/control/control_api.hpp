@@ -1,8 +1,23 @@
-// Fault-injection and inspection API of the emulated rack: HTTP + JSON (cpp-httplib) bound
-// to 127.0.0.1 only. Every request is executed on the device thread through the post
-// function, so it sees and changes the rack between two cycles; the HTTP thread waits for
-// the answer (2 s, then 503). Invalid requests get 4xx and {"error": "<reason>"}, and change
-// nothing. The endpoints are listed in docs/MODULES.md "Control API"; `rackcat ctl` is the
+// Fault-injection and inspection API of the emulated racks: HTTP + JSON on 127.0.0.1
+// (modules/control/http_server.hpp: deadlines and size caps no client can outlast).
+//
+// Who may call it: a request must carry the per-run secret (`Authorization: Bearer TOKEN`,
+// the token `rackcat run` writes to STATE/control-token, mode 0600, for its own user), name
+// the API's own origin in Host (127.0.0.1:PORT or localhost:PORT: a DNS-rebinding page has
+// another), carry no foreign Origin, and send its body as application/json (a cross-site
+// "simple" POST is text/plain). No CORS header is ever sent. These checks happen before one
+// byte of the body is read. Refusals: 401, 403, 405, 411, 413, 415; bad requests 400/404.
+//
+// What runs where: the request is parsed and validated on the API's worker thread, files it
+// names (a replay recording) are read there too, below `--data-dir` only; the device thread
+// receives one prepared command through the post function and applies it between two
+// cycles. At most kMaxInFlight commands wait for the device thread (more: 503 at once); a
+// command the device thread has not taken within the answer timeout is withdrawn and the
+// answer is 503 "nothing changed"; once taken, the client waits for its real result. So a 5xx
+// always means nothing changed.
+//
+// `/api/...` addresses slave 0; `/api/slaves/N/...` slave N of the segment; GET /api/slaves
+// lists them. The endpoints are listed in docs/MODULES.md "Control API"; `rackcat ctl` is the
 // command-line client.
 #pragma once
 
@@ -12,17 +27,31 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
-#include <thread>
 
+#include <chrono>
+#include <vector>
+
+#include "modules/control/http_server.hpp"
 #include "modules/rack/rack.hpp"
 
-namespace httplib {
-class Server;
+namespace rackcat::mdp {
+class FileRoot;
 }
 
 namespace rackcat::modules {
 
 inline constexpr uint16_t kDefaultControlPort = 8765;
+// Files in the state directory: the secret (mode 0600) and the port (with --control-port 0).
+inline constexpr const char* kTokenFileName = "control-token";
+inline constexpr const char* kPortFileName = "control-port";
+
+struct ControlApiOptions {
+  std::string token;  // the Bearer secret; listen() refuses to start without one
+  // Where replay files named by requests are read; null: such requests are refused.
+  std::shared_ptr<const mdp::FileRoot> data;
+  HttpLimits limits;
+  std::chrono::milliseconds answer_timeout{2000};
+};
 
 class ControlApi {
  public:
@@ -35,25 +64,51 @@ class ControlApi {
     nlohmann::json body;
   };
 
+  static constexpr int kMaxInFlight = 8;
+
+  // One rack (tests, fuzzing): no post function = commands run on the calling thread.
   ControlApi(Rack& rack, PostFn post);
+  // The racks of a segment, slave 0 first.
+  ControlApi(std::vector<Rack*> racks, PostFn post, ControlApiOptions options);
   ~ControlApi();
 
-  // Binds 127.0.0.1:port (0 = any free port) and serves on a thread; returns the port.
-  // Throws std::runtime_error when the port cannot be bound.
+  // Binds 127.0.0.1:port exclusively (0 = any free port) and serves; returns the port. Throws
+  // std::runtime_error when the port is taken or no token is set.
   uint16_t listen(uint16_t port);
   void stop();
 
-  // One request, executed on the calling thread (the device thread).
+  // One request without the HTTP checks (tests, fuzzing): parsed, then the command executed
+  // through the post function (or on the calling thread without one).
   Response handle(std::string_view method, std::string_view path, std::string_view body);
+  // One HTTP request with every check: what the server runs on its worker threads.
+  HttpResponse serve(const HttpRequest& request);
+  // The checks made once the header is complete, before the body is read: Host, Origin,
+  // authentication, method, Content-Type. nullopt: go on.
+  std::optional<HttpResponse> check_head(const HttpRequest& request) const;
+
+  // Requests the server cut off at their deadline (slow clients).
+  uint64_t timed_out_requests() const { return server_ ? server_->timed_out() : 0; }
+  // A fresh secret: 128 random bits (getrandom(2)) as 32 hex digits.
+  static std::string new_token();
 
  private:
-  Response dispatch(std::string_view method, std::string_view path, const nlohmann::json& body);
+  using Command = std::function<Response()>;
+  struct Prepared {
+    std::optional<Response> answer;  // decided without the device (an error, a listing)
+    Command command;                 // else: run on the device thread
+  };
+  Prepared prepare(std::string_view method, std::string_view path, std::string_view body);
+  Prepared dispatch(Rack& rack, std::string_view method, std::string_view path,
+                    const nlohmann::json& body);
+  Response execute(Command command);
 
-  Rack& rack_;
+  std::vector<Rack*> racks_;
   PostFn post_;
-  std::unique_ptr<httplib::Server> server_;
-  std::thread thread_;
+  ControlApiOptions options_;
+  uint16_t port_ = 0;
+  std::unique_ptr<HttpServer> server_;
   std::shared_ptr<std::atomic<bool>> alive_;
+  std::atomic<int> in_flight_{0};
 };
 
 }  // namespace rackcat::modules

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "mdp/file_root.hpp"
 #include "mdp/sync_manager_layout.hpp"
 #include "modules/cards/uart_driver.hpp"
 #include "modules/signals/state_space_plant.hpp"
@@ -80,6 +81,18 @@ Rack::Rack(mdp::Device& device, RackOptions options)
     if (auto* u = dynamic_cast<UartDriver*>(drivers_[m.number - 1].get())) uarts_.push_back(u);
   }
 
+  // A replay file is read below the rack file's own directory (mdp::FileRoot: no "..", no
+  // absolute path, no symlink out of it), with the rights of the (unprivileged) process.
+  if (!options_.files && std::filesystem::is_regular_file(cfg.source)) {
+    try {
+      options_.files =
+          mdp::FileRoot::open(std::filesystem::path(cfg.source).parent_path().string().empty()
+                                  ? std::string(".")
+                                  : std::filesystem::path(cfg.source).parent_path().string());
+    } catch (const std::runtime_error& e) {
+      throw mdp::ConfigError(cfg.source, 0, e.what());
+    }
+  }
   // Channel sources and card options of the rack file (after every driver exists, so
   // loopbacks can point anywhere).
   for (const mdp::Module& m : modules) {
@@ -99,13 +112,6 @@ Rack::Rack(mdp::Device& device, RackOptions options)
     for (const mdp::ChannelOptions& ch : sc.channels) {
       try {
         SourceParams params = ch.params;
-        // A replay file is relative to the rack file's directory.
-        if (auto f = params.find("file"); f != params.end() && !f->second.empty() &&
-                                          f->second.front() != '/' &&
-                                          std::filesystem::exists(cfg.source)) {
-          f->second =
-              (std::filesystem::path(cfg.source).parent_path() / f->second).lexically_normal();
-        }
         if (ch.loopback) {
           params["rim"] = std::to_string(ch.loopback->rim);
           params["slot"] = std::to_string(ch.loopback->slot);
@@ -500,7 +506,7 @@ void Rack::set_loop_ohms(uint16_t module, size_t channel, double ohms) {
 }
 
 void Rack::set_source(uint16_t module, size_t channel, std::string_view kind,
-                      const SourceParams& params) {
+                      const SourceParams& params, std::unique_ptr<Source> prebuilt) {
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (channel >= d->inputs().size()) {
@@ -525,8 +531,11 @@ void Rack::set_source(uint16_t module, size_t channel, std::string_view kind,
   }
   if (params.count("cold_junction_c"))
     throw std::invalid_argument("cold_junction_c is a card option, not a channel option");
-  SourceContext ctx = source_context();
-  std::unique_ptr<Source> s = make_source(kind, params, ctx);
+  std::unique_ptr<Source> s = std::move(prebuilt);
+  if (!s) {
+    SourceContext ctx = source_context();
+    s = make_source(kind, params, ctx);
+  }
   if (ohms) set_loop_ohms(module, channel, *ohms);
   if (open) d->inputs()[channel].open = *open;
   d->inputs()[channel].source = std::move(s);
@@ -575,6 +584,11 @@ SourceContext Rack::source_context() {
   ctx.plant = [this](const std::string& name, const SourceParams& params) -> StateSpacePlant& {
     return plant(name, params);
   };
+  if (options_.files) {
+    ctx.read_file = [files = options_.files](const std::string& file, size_t max_bytes) {
+      return files->read(file, max_bytes);
+    };
+  }
   return ctx;
 }
 

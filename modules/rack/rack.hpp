@@ -15,8 +15,8 @@
 //   rack.start_uart_ptys();                             // prints each /dev/pts/N
 //
 // Threading: everything runs on the thread that drives the Device (the ESC's cyclic thread).
-// The control API's HTTP thread hands each request to that thread through a PostFn and waits
-// for the answer.
+// The control API (modules/control/control_api.hpp, owned by the application) hands each
+// prepared command to that thread through a post function and waits for the answer.
 #pragma once
 
 #include <cstdint>
@@ -34,6 +34,10 @@
 #include "modules/rack/exception_tree.hpp"
 #include "modules/signals/source_factory.hpp"
 
+namespace rackcat::mdp {
+class FileRoot;
+}
+
 namespace rackcat::modules {
 
 class StateSpacePlant;
@@ -49,6 +53,8 @@ struct RackOptions {
   double cpu_temperature_c = 42.0;
   double cpu_temperature_limit_c = 85.0;   // emergency 0x4210 at or above
   double cpu_temperature_period_s = 30.0;  // guide §4.8: 0x2000:0F updates every 30 s
+  // Where replay files of the rack file are read (default: the rack file's own directory).
+  std::shared_ptr<const mdp::FileRoot> files;
 };
 
 using PostFn = std::function<void(std::function<void()>)>;
@@ -105,9 +111,11 @@ class Rack : public mdp::CycleListener {
   const std::map<uint8_t, RimStatus>& rims() const { return rims_; }
   const ExceptionTree& exceptions() const { return tree_; }
 
-  // Replace an input channel's source; throws std::invalid_argument with the reason.
+  // Replace an input channel's source; throws std::invalid_argument with the reason. A
+  // `prebuilt` source (built off the device thread, e.g. a replay recording the control API
+  // read) is installed instead of building one from kind/params.
   void set_source(uint16_t module, size_t channel, std::string_view kind,
-                  const SourceParams& params);
+                  const SourceParams& params, std::unique_ptr<Source> prebuilt = nullptr);
   void set_rim_state(uint8_t rim, RimState state, bool comm_error = false);
   // zone: "power_supply", "slot_card" for RIMs; rim 0 = the control module's CPU fan.
   void set_fan_rpm(uint8_t rim, std::string_view zone, double rpm);

@@ -154,33 +154,41 @@ std::unique_ptr<ReplaySource> ReplaySource::from_csv(const std::string& path, bo
     throw std::runtime_error(fmt::format("{}: not a readable regular file", path));
   if (std::filesystem::file_size(path, ec) > kMaxReplayBytes)
     throw std::runtime_error(fmt::format("{}: larger than {} bytes", path, kMaxReplayBytes));
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(fmt::format("{}: cannot open file", path));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return from_text(text, path, loop);
+}
+
+std::unique_ptr<ReplaySource> ReplaySource::from_text(std::string_view text_in,
+                                                      const std::string& origin, bool loop) {
+  // Errors name the file and line, never the line's content (the file may not be ours to show).
   std::vector<Sample> samples;
-  std::string line;
   int number = 0;
-  while (std::getline(in, line)) {
+  while (!text_in.empty()) {
+    const size_t eol = text_in.find('\n');
+    const std::string_view line = text_in.substr(0, eol);
+    text_in.remove_prefix(eol == std::string_view::npos ? text_in.size() : eol + 1);
     ++number;
     std::string_view text = trim(line);
     if (text.empty() || text.front() == '#') continue;
     const size_t comma = text.find(',');
     if (comma == std::string_view::npos)
-      throw std::runtime_error(
-          fmt::format("{}:{}: expected \"time_s,value\", got \"{}\"", path, number, text));
+      throw std::runtime_error(fmt::format("{}:{}: expected \"time_s,value\"", origin, number));
     Sample s{};
     const bool ok_t = parse_double(text.substr(0, comma), s.t);
     const bool ok_v = parse_double(text.substr(comma + 1), s.value);
     if (!ok_t || !ok_v) {
       if (samples.empty() && !ok_t && !ok_v) continue;  // a header row such as "time,value"
-      throw std::runtime_error(fmt::format("{}:{}: not a number in \"{}\"", path, number, text));
+      throw std::runtime_error(fmt::format("{}:{}: not a number", origin, number));
     }
     if (!samples.empty() && !(s.t > samples.back().t))
       throw std::runtime_error(fmt::format("{}:{}: time {} is not after the previous row's {}",
-                                           path, number, s.t, samples.back().t));
+                                           origin, number, s.t, samples.back().t));
     samples.push_back(s);
   }
-  if (samples.empty()) throw std::runtime_error(fmt::format("{}: no samples", path));
-  return std::make_unique<ReplaySource>(std::move(samples), loop, path);
+  if (samples.empty()) throw std::runtime_error(fmt::format("{}: no samples", origin));
+  return std::make_unique<ReplaySource>(std::move(samples), loop, origin);
 }
 
 double ReplaySource::sample(double t) {

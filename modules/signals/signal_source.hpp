@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace rackcat::modules {
@@ -124,6 +125,10 @@ class ReplaySource final : public Source {
   static constexpr uintmax_t kMaxReplayBytes = 64u << 20;
   // Throws std::runtime_error("<path>:<line>: <problem>") on a bad file.
   static std::unique_ptr<ReplaySource> from_csv(const std::string& path, bool loop);
+  // The same from the file's content, read by the caller (below a FileRoot); `origin` names
+  // it in errors, which never quote the content.
+  static std::unique_ptr<ReplaySource> from_text(std::string_view text, const std::string& origin,
+                                                 bool loop);
 
   double sample(double t) override;
   std::string describe() const override;

@@ -204,7 +204,9 @@ std::unique_ptr<Source> make_source(std::string_view kind, const SourceParams& p
     const std::string file = p.text("file");
     const bool loop = p.flag("loop", true);
     try {
-      s = ReplaySource::from_csv(file, loop);
+      s = ctx.read_file ? ReplaySource::from_text(
+                              ctx.read_file(file, ReplaySource::kMaxReplayBytes), file, loop)
+                        : ReplaySource::from_csv(file, loop);
     } catch (const std::runtime_error& e) {
       throw std::invalid_argument(std::string("replay: ") + e.what());  // a bad request
     }

@@ -43,6 +43,10 @@ struct SourceContext {
   std::function<bool(uint16_t module, uint8_t& rim, uint8_t& slot)> module_position;
   // Find or create the plant `name` (creating needs a/b/c in params).
   std::function<StateSpacePlant&(const std::string& name, const SourceParams& params)> plant;
+  // Reads a replay file named by the description: below the directory the user named
+  // (mdp::FileRoot: the rack file's directory, `--data-dir` for the control API). Unset: the
+  // name is opened as given (unit tests only).
+  std::function<std::string(const std::string& file, size_t max_bytes)> read_file;
 };
 
 // Keys every source accepts besides its own (handled by the rack: sensor options).

@@ -150,7 +150,8 @@ class Cell:
         while time.monotonic() < deadline:
             if self.slave.poll() is not None:
                 raise RuntimeError(f"rackcat exited: {(self.dir / 'rackcat.log').read_text()}")
-            ok = _run(*self.ns_exec(), str(RACKCAT), "ctl", "--port", str(CONTROL_PORT), "esm",
+            ok = _run(*self.ns_exec(), str(RACKCAT), "ctl", "--port", str(CONTROL_PORT),
+                      "--state-dir", str(state), "esm",
                       check=False).returncode == 0
             if ok:
                 return state

@@ -173,9 +173,11 @@ def build_expectations(rackcat, repo, rack_id, state_dir, control_port, cycles):
         "ca_2000_bytes": ca_2000_bytes,
         "emergency": {
             "code": CPU_TEMP_EMERGENCY,
-            "raise": [str(rackcat), "ctl", "--port", str(control_port), "cpu-temp",
+            "raise": [str(rackcat), "ctl", "--port", str(control_port), "--state-dir",
+                      str(state_dir), "cpu-temp",
                       "--celsius", "95", "--now"],
-            "clear": [str(rackcat), "ctl", "--port", str(control_port), "cpu-temp",
+            "clear": [str(rackcat), "ctl", "--port", str(control_port), "--state-dir",
+                      str(state_dir), "cpu-temp",
                       "--celsius", "40", "--now"],
         },
         "cycles": cycles,

@@ -13,6 +13,7 @@ drops replies later than 2 ms during configuration.
 import concurrent.futures
 import contextlib
 import json
+from pathlib import Path
 import os
 import shutil
 import subprocess
@@ -152,7 +153,8 @@ class Rackcat:
     def cli(self, *args):
         """`rackcat ctl ARGS`, the command-line client, inside the namespace; returns its JSON
         answer (or its text). Fails with the command's message on a non-zero exit."""
-        cmd = self.ns.exec_prefix() + [str(RACKCAT), "ctl", "--port", str(CONTROL_PORT)]
+        cmd = self.ns.exec_prefix() + [str(RACKCAT), "ctl", "--port", str(CONTROL_PORT),
+                                       "--state-dir", str(self.state_dir)]
         cmd += [str(a) for a in args]
         r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                            timeout=20)
@@ -170,7 +172,8 @@ class Rackcat:
     def ctl(self, method, path, body=None, expect=200):
         """One raw control API request (curl inside the namespace); returns the JSON body."""
         cmd = self.ns.exec_prefix() + ["curl", "-s", "-S", "--max-time", "10", "-X", method,
-                                       "-w", "\n%{http_code}"]
+                                       "-w", "\n%{http_code}", "-H",
+                                       f"Authorization: Bearer {self.token()}"]
         if body is not None:
             cmd += ["-H", "Content-Type: application/json", "--data", json.dumps(body)]
         cmd.append(f"http://127.0.0.1:{CONTROL_PORT}{path}")
@@ -180,6 +183,11 @@ class Rackcat:
         text, _, code = r.stdout.rpartition("\n")
         assert int(code) == expect, f"control API {method} {path} -> {code}: {text}"
         return json.loads(text) if text else None
+
+    def token(self):
+        """The control API's secret for this run (STATE/control-token, docs/MODULES.md)."""
+        path = Path(self.state_dir) / "control-token"
+        return path.read_text().strip() if path.exists() else ""
 
     def _while_cycling(self, master, fn, *args):
         # In OP the SM watchdog expires after 100 ms without frames; a control request may

@@ -50,9 +50,7 @@ def test_no_capabilities_after_socket_open_and_user_switch(rackcat, tmp_path):
 
     # --user nobody: real, effective, saved and filesystem uid and gid all switched.
     nobody = pwd.getpwnam("nobody")
-    state = tmp_path / "nobody-state"
-    state.mkdir()
-    os.chown(state, nobody.pw_uid, nobody.pw_gid)
+    state = _state_for(nobody, tmp_path)
     rc = rackcat(pcap=False, state_dir=state, extra=("--user", "nobody"))
     st = check_no_capabilities(rc.proc.proc.pid)
     assert st["Uid"].split() == [str(nobody.pw_uid)] * 4, st["Uid"]
@@ -167,7 +165,8 @@ def test_nothing_written_outside_the_state_directory(rackcat, tmp_path):
     assert new == [], f"files created: {new}"
     if stored_ok:
         # The store replaced the symlinks by its own plain file (rename does not follow).
-        assert sorted(p.name for p in state.iterdir()) == ["parameters.bin"]
+        assert sorted(p.name for p in state.iterdir()) == ["control-port", "control-token",
+                                                           "parameters.bin"]
         assert not (state / "parameters.bin").is_symlink()
 
 

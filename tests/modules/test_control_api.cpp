@@ -1,9 +1,18 @@
 // The fault-injection control API: requests as `rackcat ctl` sends them, answers in JSON,
 // invalid requests refused with a reason and no change.
-#include <httplib.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
+#include "mdp/file_root.hpp"
 #include "modules/control/control_api.hpp"
 #include "rack_fixture.hpp"
 
@@ -115,7 +124,7 @@ TEST_F(ControlApiTest, InvalidRequestsGetAReasonAndChangeNothing) {
         call("POST", "/api/channel",
              {{"module", n}, {"channel", 0}, {"source", "replay"}, {"params", {{"file", file}}}});
     EXPECT_EQ(r.status, 400) << file;
-    EXPECT_NE(r.body["error"].get<std::string>().find("regular file"), std::string::npos);
+    EXPECT_NE(r.body["error"].get<std::string>().find("--data-dir"), std::string::npos);
   }
   // Request bytes echoed in an answer are made printable so the answer stays valid JSON.
   auto odd = api.handle("GET", "/api/\xff\xfe", "");
@@ -153,24 +162,205 @@ TEST_F(ControlApiTest, FaultInjectionEndpoints) {
   EXPECT_EQ(call("GET", "/api/exceptions").status, 200);
 }
 
-TEST_F(ControlApiTest, ServesHttpOnLocalhostThroughThePostFunction) {
+namespace {
+
+// One raw HTTP exchange on 127.0.0.1:port; returns the whole answer ("" when none).
+std::string http_exchange(uint16_t port, const std::string& request) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(port);
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+    ::close(fd);
+    return {};
+  }
+  timeval tv{5, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  (void)!::send(fd, request.data(), request.size(), MSG_NOSIGNAL);
+  std::string out;
+  char buf[4096];
+  for (ssize_t n; (n = ::recv(fd, buf, sizeof buf, 0)) > 0;)
+    out.append(buf, static_cast<size_t>(n));
+  ::close(fd);
+  return out;
+}
+
+int status_of(const std::string& answer) {
+  return answer.size() > 12 ? std::atoi(answer.c_str() + 9) : 0;
+}
+
+const std::string kToken = "0123456789abcdef0123456789abcdef";
+
+std::string http_request(uint16_t port, const std::string& method, const std::string& path,
+                         const std::string& body, const std::string& extra,
+                         const std::string& type = "application/json") {
+  std::string r =
+      method + " " + path + " HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\n" + extra;
+  if (!body.empty()) {
+    r += "Content-Type: " + type + "\r\nContent-Length: " + std::to_string(body.size()) + "\r\n";
+  }
+  return r + "\r\n" + body;
+}
+
+}  // namespace
+
+// Issue 14 item 1: every request needs the token, the API's own Host, no foreign Origin and a
+// JSON body; refused requests change nothing and never reach the device thread.
+TEST_F(ControlApiTest, RefusesForeignHostOriginTokenlessAndNonJsonRequests) {
   int posted = 0;
-  ControlApi http(rack, [&](std::function<void()> f) {
-    ++posted;
-    f();  // the test thread stands in for the device thread
-  });
+  ControlApiOptions options;
+  options.token = kToken;
+  ControlApi http(
+      {&rack},
+      [&](std::function<void()> f) {
+        ++posted;
+        f();  // the test thread stands in for the device thread
+      },
+      options);
   const uint16_t port = http.listen(0);
   ASSERT_GT(port, 0);
-  httplib::Client cli("127.0.0.1", port);
-  auto res = cli.Get("/api/esm");
-  ASSERT_TRUE(res);
-  EXPECT_EQ(res->status, 200);
-  EXPECT_EQ(json::parse(res->body)["state"], "INIT");
-  auto bad = cli.Post("/api/rim/unplug", R"({"rim": 9})", "application/json");
-  ASSERT_TRUE(bad);
-  EXPECT_EQ(bad->status, 400);
-  EXPECT_NE(json::parse(bad->body)["error"].get<std::string>().find("'rim' must be 1..5"),
-            std::string::npos);
+  const std::string auth = "Authorization: Bearer " + kToken + "\r\n";
+  const std::string unplug = R"({"rim": 2})";
+  struct Case {
+    std::string request;
+    int status;
+  };
+  const std::string p = std::to_string(port);
+  const std::vector<Case> refused = {
+      {http_request(port, "POST", "/api/rim/unplug", unplug, ""), 401},
+      {http_request(port, "POST", "/api/rim/unplug", unplug, "Authorization: Bearer 0123\r\n"),
+       401},
+      {http_request(port, "POST", "/api/rim/unplug", unplug,
+                    "Authorization: Bearer " + kToken.substr(0, 31) + "0\r\n"),
+       401},
+      {"POST /api/rim/unplug HTTP/1.1\r\nHost: attacker.example:" + p + "\r\n" + auth +
+           "Content-Type: application/json\r\nContent-Length: 10\r\n\r\n" + unplug,
+       403},
+      {http_request(port, "POST", "/api/rim/unplug", unplug,
+                    auth + "Origin: http://attacker.example\r\n"),
+       403},
+      {http_request(port, "POST", "/api/rim/unplug", unplug, auth, "text/plain"), 415},
+      {http_request(port, "PUT", "/api/rim/unplug", unplug, auth), 405},
+      {http_request(port, "POST", "/api/rim/unplug", std::string(70000, ' '), auth), 413},
+  };
+  for (const Case& c : refused) {
+    const std::string answer = http_exchange(port, c.request);
+    EXPECT_EQ(status_of(answer), c.status) << c.request.substr(0, 200) << "\n" << answer;
+    EXPECT_EQ(answer.find("Access-Control-Allow"), std::string::npos) << "no CORS headers";
+  }
+  EXPECT_EQ(posted, 0);
+  EXPECT_EQ(rack.rims().at(2).state, RimState::Online);
+  // The same request, properly made, is served; localhost and the own Origin are fine.
+  EXPECT_EQ(status_of(http_exchange(port, http_request(port, "GET", "/api/esm", "", auth))), 200);
+  const std::string ok = http_exchange(
+      port, "POST /api/rim/unplug HTTP/1.1\r\nHost: localhost:" + p +
+                "\r\nOrigin: http://localhost:" + p + "\r\n" + auth +
+                "Content-Type: application/json; charset=utf-8\r\nContent-Length: 10\r\n\r\n" +
+                unplug);
+  EXPECT_EQ(status_of(ok), 200) << ok;
+  EXPECT_EQ(rack.rims().at(2).state, RimState::Offline);
   EXPECT_EQ(posted, 2);
+  // Every slave of the segment is reachable; an unknown one is 404.
+  EXPECT_EQ(
+      status_of(http_exchange(port, http_request(port, "GET", "/api/slaves/0/esm", "", auth))),
+      200);
+  EXPECT_EQ(
+      status_of(http_exchange(port, http_request(port, "GET", "/api/slaves/1/esm", "", auth))),
+      404);
   http.stop();
+}
+
+// Item 4: the port is ours alone.
+TEST_F(ControlApiTest, ASecondListenerOnTheSamePortIsRefused) {
+  ControlApiOptions options;
+  options.token = kToken;
+  ControlApi first({&rack}, nullptr, options);
+  const uint16_t port = first.listen(0);
+  ControlApi second({&rack}, nullptr, options);
+  EXPECT_THROW(second.listen(port), std::runtime_error);
+  first.stop();
+}
+
+// Item 3: slow clients are cut off at the request deadline; a legitimate request is served
+// meanwhile; a huge announced body is refused before it is read.
+TEST_F(ControlApiTest, SlowClientsCannotStarveTheApi) {
+  ControlApiOptions options;
+  options.token = kToken;
+  options.limits.request_deadline = std::chrono::milliseconds(800);
+  ControlApi http({&rack}, nullptr, options);
+  const uint16_t port = http.listen(0);
+  std::vector<int> slow;
+  for (int i = 0; i < 40; ++i) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(port);
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    (void)!::send(fd, "GET /api/esm HTTP/1.1\r\nHo", 25, MSG_NOSIGNAL);
+    slow.push_back(fd);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string answer = http_exchange(
+      port, http_request(port, "GET", "/api/esm", "", "Authorization: Bearer " + kToken + "\r\n"));
+  EXPECT_EQ(status_of(answer), 200);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(500));
+  // Trickling one byte at a time does not extend the deadline.
+  for (int k = 0; k < 12; ++k) {
+    for (int fd : slow) (void)!::send(fd, "s", 1, MSG_NOSIGNAL);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_GE(http.timed_out_requests(), 40u);
+  for (int fd : slow) ::close(fd);
+  http.stop();
+}
+
+// Item 3: a 503 means nothing changed: a command the device thread did not take in time is
+// withdrawn and skipped when the device thread gets to it.
+TEST_F(ControlApiTest, ACommandNotTakenInTimeIsWithdrawn) {
+  std::vector<std::function<void()>> parked;
+  ControlApiOptions options;
+  options.token = kToken;
+  options.answer_timeout = std::chrono::milliseconds(50);
+  ControlApi http(
+      {&rack}, [&](std::function<void()> f) { parked.push_back(std::move(f)); }, options);
+  auto r = http.handle("POST", "/api/rim/unplug", R"({"rim": 2})");
+  EXPECT_EQ(r.status, 503);
+  EXPECT_NE(r.body["error"].get<std::string>().find("nothing changed"), std::string::npos);
+  ASSERT_EQ(parked.size(), 1u);
+  parked.front()();  // the device thread comes back
+  EXPECT_EQ(rack.rims().at(2).state, RimState::Online);
+}
+
+// Items 1 and 8: files named by a request are read below --data-dir only, and an error never
+// quotes their content.
+TEST_F(ControlApiTest, ReplayFilesAreReadBelowTheDataDirectoryOnly) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::path(::testing::TempDir()) / "control_api_data";
+  fs::remove_all(root);
+  fs::create_directories(root / "data");
+  { std::ofstream(root / "data" / "ok.csv") << "0,1\n1,2\n"; }
+  { std::ofstream(root / "secret") << "root:SECRET-HASH:0:0\n"; }
+  fs::create_symlink(root / "secret", root / "data" / "link.csv");
+  { std::ofstream(root / "data" / "bad.csv") << "0,1\nSECRET-LINE\n"; }
+  ControlApiOptions options;
+  options.token = kToken;
+  options.data = mdp::FileRoot::open((root / "data").string());
+  ControlApi http({&rack}, nullptr, options);
+  const uint16_t n = at(1, 12).module().number;  // an analog input card
+  auto replay = [&](const std::string& file) {
+    return http.handle(
+        "POST", "/api/channel",
+        json{{"module", n}, {"channel", 0}, {"source", "replay"}, {"params", {{"file", file}}}}
+            .dump());
+  };
+  EXPECT_EQ(replay("ok.csv").status, 200);
+  for (const std::string& file : std::vector<std::string>{"/etc/shadow", "../secret", "link.csv",
+                                                          (root / "secret").string(), "bad.csv"}) {
+    const auto r = replay(file);
+    EXPECT_EQ(r.status, 400) << file;
+    EXPECT_EQ(r.body.dump().find("SECRET"), std::string::npos) << r.body.dump();
+  }
+  fs::remove_all(root);
 }

@@ -16,7 +16,7 @@ import time
 
 import pysoem
 
-iface, pty, rackcat, port = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
+iface, pty, rackcat, port, state = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5]
 failures = []
 
 
@@ -28,7 +28,8 @@ def check(what, got, expect):
 
 
 def ctl(*args):
-    subprocess.run([rackcat, "ctl", "--port", port, *args], check=True, capture_output=True)
+    subprocess.run([rackcat, "ctl", "--port", port, "--state-dir", state, *args], check=True,
+                   capture_output=True)
 
 
 def u32(b):

@@ -18,4 +18,4 @@ netns_up "$ns" rcm0 rcm1
 ip netns exec "$ns" "$rackcat" run --iface rcm0 --control-port 18767 --state-dir "$state" >"$log" 2>&1 &
 for _ in $(seq 50); do grep -q "control API on" "$log" && break; sleep 0.1; done
 pty=$(grep "channel 0:" "$log" | head -1 | awk '{print $NF}')
-ip netns exec "$ns" "$PY" "$here/check_modules.py" rcm1 "$pty" "$rackcat" 18767
+ip netns exec "$ns" "$PY" "$here/check_modules.py" rcm1 "$pty" "$rackcat" 18767 "$state"
