@@ -27,6 +27,8 @@ RULES = {
     "foe": BASE + ["foe/"],
     "mdp": MDP,
     "esi": MDP + ["esi/"],
+    # Generic devices from their ESI: the generic CoE/SII layers and the device seam only.
+    "device": COE + ["esi/", "ecat/application.hpp", "device/"],
     "modules/signals": BASE + ["modules/signals/"],
     "modules/canopen": COE + ["modules/canopen/"],
     "modules/cards": MDP + ["modules/signals/", "modules/cards/"],
@@ -43,11 +45,12 @@ RULES = {
     "ecat/lan9252": BASE + ECAT_PORT + ["ecat/lan9252/"],
     "ecat/host": ECAT,
     "apps/rack_slave": MDP + ["ecat/", "esi/", "modules/", "apps/rack_slave/"],
-    "apps": MDP + ["ecat/", "esi/", "modules/", "apps/"],
+    "apps": MDP + ["ecat/", "esi/", "modules/", "device/", "apps/"],
     # Tests and benchmarks of a layer see that layer and what it may see, plus their own folder.
     "tests/coe": COE + ["tests/coe/", "tests/support/"],
     "tests/mdp": MDP + ["tests/mdp/", "tests/support/"],
     "tests/esi": MDP + ["esi/", "tests/esi/", "tests/support/"],
+    "tests/device": COE + ["esi/", "ecat/application.hpp", "device/", "tests/device/"],
     "tests/ecat": ECAT + ["tests/ecat/", "tests/support/"],
     "tests/ecat_wire_slave": ECAT + ["tests/ecat_wire_slave/", "tests/ecat/"],
     "tests/modules": MDP + ["modules/", "tests/modules/", "tests/support/"],

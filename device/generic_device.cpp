@@ -1,0 +1,125 @@
+// Generic ESI device: SII from the ESI (ETG.2010), CoE via coe::SdoServer (ETG.1000.6 §5.6),
+// process data per the PDO assignment (ETG.1000.6 §5.6.7.4).
+#include "device/generic_device.hpp"
+
+#include "esi/describe_dictionary.hpp"
+#include "esi/sii_image.hpp"
+
+namespace rackcat::device {
+
+void copy_bits(std::span<const uint8_t> src, size_t src_bit, std::span<uint8_t> dst, size_t dst_bit,
+               size_t bits) {
+  for (size_t i = 0; i < bits; ++i) {
+    const size_t s = src_bit + i, d = dst_bit + i;
+    if (s / 8 >= src.size() || d / 8 >= dst.size()) return;
+    const bool v = (src[s / 8] >> (s % 8)) & 1;
+    if (v)
+      dst[d / 8] = static_cast<uint8_t>(dst[d / 8] | (1u << (d % 8)));
+    else
+      dst[d / 8] = static_cast<uint8_t>(dst[d / 8] & ~(1u << (d % 8)));
+  }
+}
+
+namespace {
+uint16_t assigned_bytes(const std::vector<esi::PdoDescription>& pdos) {
+  std::vector<esi::PdoDescription> on;
+  for (const auto& p : pdos)
+    if (p.assigned) on.push_back(p);
+  return esi::pdo_bytes(on);
+}
+}  // namespace
+
+GenericDevice::GenericDevice(EsiDevice esi) : esi_(std::move(esi)) {
+  sii_ = esi::encode_sii(esi_.description).bytes;
+  if (esi_.has_coe) {
+    sdo_ = std::make_unique<coe::SdoServer>(esi_.dictionary);
+    image_ = std::make_unique<coe::ProcessImage>(esi_.dictionary);
+    image_->compile();
+    sizes_ = {static_cast<uint16_t>(image_->output_bytes()),
+              static_cast<uint16_t>(image_->input_bytes())};
+  } else {
+    sizes_ = {assigned_bytes(esi_.description.rx_pdos), assigned_bytes(esi_.description.tx_pdos)};
+  }
+  outputs_.assign(sizes_.outputs, 0);
+  inputs_.assign(sizes_.inputs, 0);
+}
+
+ecat::ProcessDataSizes GenericDevice::process_data_sizes() const {
+  return sizes_;
+}
+
+std::vector<uint8_t> GenericDevice::outputs() const {
+  std::lock_guard lock(mutex_);
+  return outputs_;
+}
+
+std::vector<uint8_t> GenericDevice::inputs() const {
+  std::lock_guard lock(mutex_);
+  return inputs_;
+}
+
+void GenericDevice::set_input_bits(size_t bit, size_t bits, std::span<const uint8_t> source,
+                                   size_t source_bit) {
+  std::lock_guard lock(mutex_);
+  copy_bits(source, source_bit, inputs_, bit, bits);
+}
+
+uint16_t GenericDevice::on_state_request(ecat::AlState from, ecat::AlState to) {
+  if (image_ && from == ecat::AlState::PreOp && to == ecat::AlState::SafeOp) {
+    // The assignment may have changed in PREOP: recompile (ETG.1000.6 Table 11 0x001D/0x001E
+    // are the ESC's SM checks against process_data_sizes()).
+    if (image_->compile() != coe::AbortCode::None) return 0x0024;  // invalid input mapping
+    std::lock_guard lock(mutex_);
+    sizes_ = {static_cast<uint16_t>(image_->output_bytes()),
+              static_cast<uint16_t>(image_->input_bytes())};
+    outputs_.assign(sizes_.outputs, 0);
+    inputs_.resize(sizes_.inputs, 0);
+  }
+  return 0;
+}
+
+void GenericDevice::on_state_changed(ecat::AlState, ecat::AlState to) {
+  state_ = to;
+  if (to == ecat::AlState::Init && sdo_) sdo_->reset();
+}
+
+size_t GenericDevice::on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
+  if (!sdo_) return 0;
+  return sdo_->handle(request, reply, static_cast<coe::EsmState>(state_));
+}
+
+size_t GenericDevice::poll_mailbox(std::span<uint8_t> reply) {
+  return sdo_ ? sdo_->poll(reply) : 0;
+}
+
+void GenericDevice::update_inputs(std::span<uint8_t> inputs) {
+  std::unique_lock lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return;  // the control side is writing: keep last cycle's inputs
+  if (image_) {
+    // Inputs set from outside land in the mapped objects, which the master reads via SM3.
+    for (const auto& c : image_->input_copies()) {
+      copy_bits(inputs_, c.pd_bit, std::span<uint8_t>(c.image, (c.image_bit + c.bits + 7) / 8),
+                c.image_bit, c.bits);
+    }
+    image_->read_inputs(inputs);
+  } else {
+    const size_t n = std::min(inputs.size(), inputs_.size());
+    std::copy_n(inputs_.begin(), n, inputs.begin());
+  }
+}
+
+void GenericDevice::on_outputs(std::span<const uint8_t> outputs) {
+  if (image_) image_->write_outputs(outputs);
+  std::unique_lock lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return;
+  const size_t n = std::min(outputs.size(), outputs_.size());
+  std::copy_n(outputs.begin(), n, outputs_.begin());
+}
+
+void GenericDevice::on_watchdog_expired() {
+  // Outputs fall to their safe state, zero (ETG.1000.6 §5.3.2 SM watchdog).
+  std::lock_guard lock(mutex_);
+  std::fill(outputs_.begin(), outputs_.end(), 0);
+}
+
+}  // namespace rackcat::device

@@ -1,0 +1,61 @@
+// A device built from its ESI (device/esi_device.hpp) behind the ecat::Application seam: it
+// serves the SII image encoded from the ESI, answers CoE through coe::SdoServer when the ESI
+// has a CoE mailbox, and exchanges process data per its PDOs. Outputs the master writes stay
+// readable (outputs()); inputs are whatever set_inputs()/the line's wiring put there (with CoE,
+// the mapped input objects, which SDO uploads show).
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <vector>
+
+#include "coe/process_image.hpp"
+#include "coe/sdo_server.hpp"
+#include "device/esi_device.hpp"
+#include "ecat/application.hpp"
+
+namespace rackcat::device {
+
+class GenericDevice final : public ecat::Application {
+ public:
+  explicit GenericDevice(EsiDevice esi);
+
+  const EsiDevice& esi() const { return esi_; }
+  coe::ObjectDictionary& dictionary() { return esi_.dictionary; }
+
+  // Process-data sizes with the current assignment (SM2 outputs, SM3 inputs).
+  ecat::ProcessDataSizes process_data_sizes() const override;
+  // Last outputs the master wrote (SM2 bytes; zeros before the first write).
+  std::vector<uint8_t> outputs() const;
+  // Replace bits [bit, bit+bits) of the inputs (SM3 layout). Thread-safe.
+  void set_input_bits(size_t bit, size_t bits, std::span<const uint8_t> source, size_t source_bit);
+  std::vector<uint8_t> inputs() const;
+
+  std::span<const uint8_t> eeprom() const override { return sii_; }
+  uint16_t on_state_request(ecat::AlState from, ecat::AlState to) override;
+  void on_state_changed(ecat::AlState from, ecat::AlState to) override;
+  size_t on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) override;
+  size_t poll_mailbox(std::span<uint8_t> reply) override;
+  void update_inputs(std::span<uint8_t> inputs) override;
+  void on_outputs(std::span<const uint8_t> outputs) override;
+  void on_watchdog_expired() override;
+
+ private:
+  EsiDevice esi_;
+  std::vector<uint8_t> sii_;
+  std::unique_ptr<coe::SdoServer> sdo_;
+  std::unique_ptr<coe::ProcessImage> image_;
+  ecat::AlState state_ = ecat::AlState::Init;
+  ecat::ProcessDataSizes sizes_;
+  mutable std::mutex mutex_;  // guards outputs_/inputs_ against the control side
+  std::vector<uint8_t> outputs_;
+  std::vector<uint8_t> inputs_;
+};
+
+// Copies bits between byte buffers (LSB-first, EtherCAT bit order).
+void copy_bits(std::span<const uint8_t> src, size_t src_bit, std::span<uint8_t> dst, size_t dst_bit,
+               size_t bits);
+
+}  // namespace rackcat::device

@@ -1,0 +1,156 @@
+// ESI device reader: the test devices of data/rackcat-test-devices.xml (written for these tests
+// from ETG.2000) and one precise error per bad file.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "device/esi_device.hpp"
+#include "device/esi_error.hpp"
+#include "esi/sii_image.hpp"
+#include "esi/sii_parser.hpp"
+
+namespace rackcat::device {
+namespace {
+
+const std::string kFile = std::string(RACKCAT_DEVICE_TEST_DATA) + "/rackcat-test-devices.xml";
+
+EsiDevice load(const std::string& name) {
+  return load_esi_device(kFile, DeviceSelector::named(name));
+}
+
+TEST(EsiDevice, CouplerWithoutMailboxHasIdentityAndNoSm) {
+  auto d = load("RC1100");
+  EXPECT_FALSE(d.has_coe);
+  EXPECT_EQ(d.description.vendor_id, 0x0E1Cu);
+  EXPECT_EQ(d.description.product_code, 0x1100u);
+  EXPECT_EQ(d.description.revision, 0x00010000u);
+  EXPECT_EQ(d.description.device_name, "RC1100 EtherCAT coupler");
+  EXPECT_EQ(d.description.group_name, "Couplers");
+  EXPECT_TRUE(d.description.sms.empty());
+  auto info = esi::parse_sii(esi::encode_sii(d.description).span());
+  EXPECT_EQ(info.product_code, 0x1100u);
+  EXPECT_EQ(info.standard_receive_size, 0u);
+  EXPECT_EQ(info.mailbox_protocol, 0u);
+  EXPECT_EQ(info.string(info.general.name_idx), "RC1100 EtherCAT coupler");
+  EXPECT_EQ(info.pdi_control, 0x0105u);  // from <ConfigData>
+}
+
+TEST(EsiDevice, DigitalInputPdosGoToSm3) {
+  auto d = load("RC1008");
+  EXPECT_FALSE(d.has_coe);
+  ASSERT_EQ(d.description.sms.size(), 4u);
+  EXPECT_EQ(d.description.sms[3].type, esi::SmType::ProcessIn);
+  EXPECT_EQ(d.description.sms[3].default_size, 1u);
+  EXPECT_FALSE(d.description.sms[0].enable);
+  ASSERT_EQ(d.description.tx_pdos.size(), 8u);
+  EXPECT_EQ(d.description.tx_pdos[7].sm, 3);
+  auto info = esi::parse_sii(esi::encode_sii(d.description).span());
+  ASSERT_EQ(info.tx_pdos.size(), 8u);
+  EXPECT_EQ(info.tx_pdos[0].entries[0].index, 0x6000u);
+  EXPECT_EQ(info.tx_pdos[0].entries[0].bit_length, 1u);
+}
+
+TEST(EsiDevice, ByProductCode) {
+  auto d = load_esi_device(kFile, DeviceSelector::by_code(0x2008, 0x00010000));
+  EXPECT_EQ(d.description.order_code, "RC2008");
+  EXPECT_EQ(d.description.sms[2].type, esi::SmType::ProcessOut);
+  EXPECT_EQ(d.description.sms[2].default_size, 1u);
+}
+
+TEST(EsiDevice, AnalogDictionaryFromEsi) {
+  auto d = load("RC3102");
+  ASSERT_TRUE(d.has_coe);
+  const auto& od = d.dictionary;
+  ASSERT_NE(od.find(0x1C13), nullptr);
+  EXPECT_EQ(od.find(0x1C13)->code(), coe::ObjectCode::Array);
+  EXPECT_EQ(od.find(0x1C13)->get_u(0), 2u);
+  EXPECT_EQ(od.find(0x1C13)->get_u(1), 0x1A00u);
+  EXPECT_EQ(od.find(0x1C13)->get_u(2), 0x1A01u);
+  EXPECT_TRUE(od.find(0x1C13)->entry(1)->access & coe::access::kWritePreOp);
+  EXPECT_FALSE(od.find(0x1C13)->entry(1)->access & coe::access::kWriteOp);
+  const auto* ai = od.find(0x6000);
+  ASSERT_NE(ai, nullptr);
+  EXPECT_EQ(ai->code(), coe::ObjectCode::Record);
+  EXPECT_EQ(ai->entry(0x11)->data_type, static_cast<uint16_t>(coe::DataType::Integer16));
+  EXPECT_EQ(ai->entry(0x11)->bit_offset, 32u);
+  EXPECT_TRUE(ai->entry(0x11)->access & coe::access::kTxPdoMappable);
+  EXPECT_EQ(od.find(0x8000)->get_u(0), 5u);
+  EXPECT_TRUE(od.find(0x8000)->entry(0)->access & coe::access::kBackup);
+  EXPECT_EQ(od.find(0x1008)->get_string(0), "RC3102");
+  // Derived from the ESI: identity and mapping objects.
+  EXPECT_EQ(od.find(0x1018)->get_u(2), 0x3102u);
+  EXPECT_EQ(od.find(0x1A01)->get_u(4), 0x60101110u);
+  EXPECT_EQ(d.description.sms[3].default_size, 8u);  // 2 x (1+1+14+16) bits
+  ASSERT_EQ(d.description.dc_modes.size(), 2u);
+  EXPECT_EQ(d.description.dc_modes[1].assign_activate, 0x0300u);
+  auto info = esi::parse_sii(esi::encode_sii(d.description).span());
+  EXPECT_EQ(info.mailbox_protocol, esi::sii::kProtoCoE);
+  EXPECT_EQ(info.standard_receive_offset, 0x1000u);
+}
+
+// One precise error: file, line, reason.
+void expect_error(const std::string& xml, size_t line, const std::string& reason_part,
+                  const DeviceSelector& sel = DeviceSelector{}) {
+  try {
+    parse_esi_device(xml, "bad.xml", sel);
+    FAIL() << "no error for " << reason_part;
+  } catch (const FileError& e) {
+    EXPECT_EQ(e.file(), "bad.xml");
+    EXPECT_EQ(e.line(), line) << e.what();
+    EXPECT_NE(e.reason().find(reason_part), std::string::npos) << e.what();
+  }
+}
+
+std::string wrap(const std::string& device) {
+  return "<EtherCATInfo>\n<Vendor><Id>#x1</Id></Vendor>\n<Descriptions><Devices>\n" + device +
+         "</Devices></Descriptions></EtherCATInfo>\n";
+}
+
+TEST(EsiDeviceErrors, MissingDevice) {
+  expect_error(wrap("<Device><Type ProductCode=\"#x1\">A</Type></Device>\n"), 3,
+               "no <Device> matches name \"B\"", DeviceSelector::named("B"));
+}
+
+TEST(EsiDeviceErrors, UnknownDataType) {
+  expect_error(wrap("<Device><Type>A</Type>\n"
+                    "<Sm StartAddress=\"#x1000\" ControlByte=\"#x20\">Inputs</Sm>\n"
+                    "<TxPdo Sm=\"0\"><Index>#x1A00</Index>\n"
+                    "<Entry><Index>#x6000</Index><SubIndex>1</SubIndex><BitLen>8</BitLen>\n"
+                    "<DataType>FOO8</DataType></Entry></TxPdo></Device>\n"),
+               8, "unknown data type \"FOO8\"");
+}
+
+TEST(EsiDeviceErrors, PdoBeyondSmSize) {
+  expect_error(wrap("<Device><Type>A</Type>\n"
+                    "<Sm StartAddress=\"#x1000\" ControlByte=\"#x20\" MaxSize=\"1\">Inputs</Sm>\n"
+                    "<TxPdo Sm=\"0\"><Index>#x1A00</Index>\n"
+                    "<Entry><Index>#x6000</Index><SubIndex>1</SubIndex><BitLen>16</BitLen>\n"
+                    "<DataType>UINT</DataType></Entry></TxPdo></Device>\n"),
+               5, "need 2 bytes, more than MaxSize 1");
+}
+
+TEST(EsiDeviceErrors, ContradictoryBitLength) {
+  expect_error(wrap("<Device><Type>A</Type>\n"
+                    "<Sm StartAddress=\"#x1000\" ControlByte=\"#x20\">Inputs</Sm>\n"
+                    "<TxPdo Sm=\"0\"><Index>#x1A00</Index>\n"
+                    "<Entry><Index>#x6000</Index><SubIndex>1</SubIndex>\n<BitLen>8</BitLen>\n"
+                    "<DataType>UINT</DataType></Entry></TxPdo></Device>\n"),
+               8, "<BitLen> 8 contradicts UINT");
+}
+
+TEST(EsiDeviceErrors, ModularDeviceRefusedPrecisely) {
+  try {
+    load("RC5001");
+    FAIL();
+  } catch (const FileError& e) {
+    EXPECT_NE(e.reason().find("<Slots>"), std::string::npos) << e.what();
+    EXPECT_GT(e.line(), 1u);
+  }
+}
+
+TEST(EsiDeviceErrors, NotXml) {
+  expect_error("<EtherCATInfo>\n<Vendor>", 2, "not well-formed");
+}
+
+}  // namespace
+}  // namespace rackcat::device
