@@ -20,6 +20,8 @@ constexpr int PACKET_IGNORE_OUTGOING = 23;
 #endif
 
 constexpr size_t kEthHeader = 14;
+constexpr size_t kVlanTag = 4;
+constexpr uint16_t kEtherTypeVlan = 0x8100;
 constexpr size_t kEthTypeOffset = 12;
 
 std::string errno_text(int err) {
@@ -86,10 +88,17 @@ RawSocketLink::RawSocketLink(const std::string& interface_name) : name_(interfac
     // Not available on every kernel; both only save work.
     (void)setsockopt(fd_, SOL_PACKET, PACKET_IGNORE_OUTGOING, &one, sizeof(one));
     (void)setsockopt(fd_, SOL_PACKET, PACKET_QDISC_BYPASS, &one, sizeof(one));
+    // The VLAN tag of a tagged frame, which the kernel strips before we see the frame.
+    if (setsockopt(fd_, SOL_PACKET, PACKET_AUXDATA, &one, sizeof(one)) < 0) {
+      fail_open(name_, "PACKET_AUXDATA", errno);
+    }
 
     sockaddr_ll addr{};
     addr.sll_family = AF_PACKET;
-    addr.sll_protocol = htons(kEtherTypeEcat);
+    // ETH_P_ALL, not 0x88A4: the kernel clears a stripped VLAN tag before it hands a frame to
+    // sockets bound to one EtherType, and keeps it (in PACKET_AUXDATA) only for taps on every
+    // protocol. The filter above still keeps nothing but EtherCAT.
+    addr.sll_protocol = htons(ETH_P_ALL);
     addr.sll_ifindex = ifindex_;
     if (::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) < 0) {
       fail_open(name_, "bind", errno);
@@ -115,21 +124,51 @@ RawSocketLink::~RawSocketLink() {
 std::span<uint8_t> RawSocketLink::try_receive() {
   for (;;) {
     sockaddr_ll from{};
-    socklen_t from_len = sizeof(from);
-    ssize_t n = ::recvfrom(fd_, rx_.data(), rx_.size(), MSG_DONTWAIT | MSG_TRUNC,
-                           reinterpret_cast<sockaddr*>(&from), &from_len);
+    // Room for a tag the kernel took off (below): the frame is received 4 bytes short of the
+    // buffer.
+    iovec iov{rx_.data(), rx_.size() - kVlanTag};
+    alignas(cmsghdr) uint8_t control[CMSG_SPACE(sizeof(tpacket_auxdata))];
+    msghdr msg{};
+    msg.msg_name = &from;
+    msg.msg_namelen = sizeof(from);
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof(control);
+    const ssize_t n = ::recvmsg(fd_, &msg, MSG_DONTWAIT | MSG_TRUNC);
     if (n < 0) {
       // EAGAIN: nothing pending. EINTR: a signal; the caller's loop looks at it.
       // Anything else (ENETDOWN while the interface goes down) also means "no frame now".
       return {};
     }
-    const auto len = static_cast<size_t>(n);
+    size_t len = static_cast<size_t>(n);
     // Same checks as the kernel filter, for kernels where it could not be attached.
-    if (from.sll_pkttype == PACKET_OUTGOING || len < kEthHeader || len > rx_.size() ||
+    if (from.sll_pkttype == PACKET_OUTGOING || len < kEthHeader || len > iov.iov_len ||
         rx_[kEthTypeOffset] != (kEtherTypeEcat >> 8) ||
         rx_[kEthTypeOffset + 1] != (kEtherTypeEcat & 0xFF)) {
       ++ignored_;
       continue;
+    }
+    // An IEEE 802.1Q tag the kernel (or the NIC) stripped comes back in PACKET_AUXDATA: put
+    // it back where it was, so the frame is processed and answered as it arrived, tagged and
+    // at full length (ETG.1000.4 §5.3, docs/ESC.md).
+    for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+      if (c->cmsg_level != SOL_PACKET || c->cmsg_type != PACKET_AUXDATA ||
+          c->cmsg_len < CMSG_LEN(sizeof(tpacket_auxdata))) {
+        continue;
+      }
+      tpacket_auxdata aux{};
+      std::memcpy(&aux, CMSG_DATA(c), sizeof(aux));
+      if ((aux.tp_status & TP_STATUS_VLAN_VALID) == 0) continue;
+      const uint16_t tpid =
+          (aux.tp_status & TP_STATUS_VLAN_TPID_VALID) ? aux.tp_vlan_tpid : kEtherTypeVlan;
+      std::memmove(&rx_[kEthTypeOffset + kVlanTag], &rx_[kEthTypeOffset], len - kEthTypeOffset);
+      rx_[kEthTypeOffset] = static_cast<uint8_t>(tpid >> 8);
+      rx_[kEthTypeOffset + 1] = static_cast<uint8_t>(tpid);
+      rx_[kEthTypeOffset + 2] = static_cast<uint8_t>(aux.tp_vlan_tci >> 8);
+      rx_[kEthTypeOffset + 3] = static_cast<uint8_t>(aux.tp_vlan_tci);
+      len += kVlanTag;
+      ++vlan_tagged_;
     }
     ++rx_frames_;
     return {rx_.data(), len};

@@ -50,7 +50,9 @@ class RawSocketLink {
 
   // Receives one EtherCAT frame into the link's buffer without waiting. Returns the frame
   // (Ethernet header included), or an empty span when no frame is pending. Non-EtherCAT and
-  // truncated frames are consumed and skipped. The span stays valid until the next receive.
+  // truncated frames are consumed and skipped. A VLAN tag the kernel stripped is put back
+  // (PACKET_AUXDATA), so the frame is exactly what was on the wire. The span stays valid until
+  // the next receive.
   std::span<uint8_t> try_receive();
 
   // Sends a complete Ethernet frame (header included, without FCS). Returns false when the
@@ -66,6 +68,8 @@ class RawSocketLink {
   uint64_t frames_received() const { return rx_frames_; }
   uint64_t frames_sent() const { return tx_frames_; }
   uint64_t frames_ignored() const { return ignored_; }
+  // Frames that arrived with an IEEE 802.1Q tag (recovered from PACKET_AUXDATA).
+  uint64_t frames_vlan_tagged() const { return vlan_tagged_; }
   uint64_t send_errors() const { return tx_errors_; }
 
  private:
@@ -77,6 +81,7 @@ class RawSocketLink {
   uint64_t rx_frames_ = 0;
   uint64_t tx_frames_ = 0;
   uint64_t ignored_ = 0;
+  uint64_t vlan_tagged_ = 0;
   uint64_t tx_errors_ = 0;
 };
 

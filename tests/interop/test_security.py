@@ -250,3 +250,65 @@ def test_store_into_a_root_owned_read_only_state_directory_fails(rackcat, tmp_pa
         master.close()
     rc.stop()
     assert list(state.iterdir()) == []
+
+
+# --- issue 14 item 7: a VLAN-tagged request is answered tagged, at full length --------------
+
+SOL_PACKET = 263
+PACKET_AUXDATA = 8
+TP_STATUS_VLAN_VALID = 0x10
+PACKET_OUTGOING = 4
+
+
+def test_vlan_tagged_request_is_answered_tagged(rackcat):
+    rc = rackcat(pcap=True)
+    tci = (5 << 13) | 42  # priority 5, VLAN 42
+    # BRD of register 0x0000 (type, revision), ETG.1000.4 §5.4: header, 2 data bytes, WKC.
+    datagram = struct.pack("<BBHHHH", 0x07, 0x11, 0, 0x0000, 2, 0) + b"\0\0" + b"\0\0"
+    ecat = struct.pack("<H", len(datagram) | 0x1000) + datagram
+    src = bytes.fromhex("020000000a01")
+    frame = b"\xff" * 6 + src + struct.pack("!HHH", 0x8100, tci, 0x88A4) + ecat
+    frame += b"\0" * (64 - len(frame))
+    s = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(0x0003))
+    s.bind((rc.iface, 0))
+    s.setsockopt(SOL_PACKET, PACKET_AUXDATA, 1)
+    s.settimeout(0.2)
+    seen = []
+    try:
+        got = None
+        deadline = time.monotonic() + 5
+        while got is None and time.monotonic() < deadline:
+            s.send(frame)
+            end = time.monotonic() + 0.5
+            while time.monotonic() < end:
+                try:
+                    data, anc, _, addr = s.recvmsg(2048, socket.CMSG_SPACE(32))
+                except socket.timeout:
+                    break
+                seen.append((addr[2], data[:20].hex(), [(a, b, c.hex()) for a, b, c in anc]))
+                if addr[2] == PACKET_OUTGOING or len(data) < 14:
+                    continue
+                vlan = None
+                for level, kind, payload in anc:
+                    if level == SOL_PACKET and kind == PACKET_AUXDATA:
+                        status, _, _, _, _, vtci, vtpid = struct.unpack("<IIIHHHH", payload[:20])
+                        if status & TP_STATUS_VLAN_VALID:
+                            vlan = (vtpid or 0x8100, vtci)
+                # The kernel strips the tag on our side too: the frame is 4 bytes short here and
+                # the tag is in PACKET_AUXDATA; a tag left in the data shows as 0x8100.
+                if data[12:14] == b"\x81\x00":
+                    vlan = (0x8100, struct.unpack("!H", data[14:16])[0])
+                    data = data[:12] + data[16:]
+                if data[12:14] != b"\x88\xa4" or data[6:12] == src and vlan is None:
+                    continue
+                if data[16] == 0x07 and data[17] == 0x11:
+                    got = (data, vlan)
+                    break
+    finally:
+        s.close()
+    rc.stop()
+    assert got is not None, f"no answer to the tagged BRD; seen {seen[:6]}"
+    data, vlan = got
+    assert vlan == (0x8100, tci), f"answered untagged or with another tag: {vlan}"
+    assert len(data) + 4 == len(frame), f"answer {len(data) + 4} bytes, request {len(frame)}"
+    assert struct.unpack("<H", data[14 + 2 + 10 + 2:14 + 2 + 10 + 4])[0] == 1  # WKC: one slave
