@@ -14,10 +14,8 @@
 namespace rackcat::ecat {
 namespace {
 
-// How often the busy-poll loop looks at the capture flush deadline, and how often the pcap
-// buffer is written out while frames flow (so a killed process still leaves a capture).
-constexpr uint64_t kHousekeepingNs = 1'000'000;
-constexpr uint64_t kPcapFlushNs = 1'000'000'000;
+// The capture is written out by the PcapWriter's own thread (pcap_writer.hpp); the loop
+// only hands it frames.
 
 // Shared with the signal handler: only lock-free atomics and write(2), which are
 // async-signal-safe.
@@ -142,7 +140,6 @@ int EventLoop::run() {
 
 int EventLoop::run_blocking() {
   pollfd fds[2] = {{link_.fd(), POLLIN, 0}, {event_fd_, POLLIN, 0}};
-  uint64_t next_flush = monotonic_ns() + kPcapFlushNs;
   // Posts and signals that arrived before run() are handled on the first pass.
   if (take_stop_signal()) return 0;
   run_posted();
@@ -150,13 +147,6 @@ int EventLoop::run_blocking() {
     uint64_t now = monotonic_ns();
     fire_timers(now);
     uint64_t deadline = timers_ != nullptr ? timers_->next_deadline_ns() : TimerSource::kNever;
-    if (options_.pcap != nullptr) {
-      if (now >= next_flush) {
-        options_.pcap->flush();
-        next_flush = now + kPcapFlushNs;
-      }
-      deadline = std::min(deadline, next_flush);
-    }
     timespec timeout{};
     timespec* timeout_ptr = nullptr;
     if (deadline != TimerSource::kNever) {
@@ -190,8 +180,6 @@ int EventLoop::run_blocking() {
 
 int EventLoop::run_busy_poll() {
   uint64_t now = monotonic_ns();
-  uint64_t next_housekeeping = now;
-  uint64_t next_flush = now + kPcapFlushNs;
   uint64_t deadline = timers_ != nullptr ? timers_->next_deadline_ns() : TimerSource::kNever;
   while (!stop_requested_.load(std::memory_order_acquire)) {
     const auto frame = link_.try_receive();
@@ -210,13 +198,6 @@ int EventLoop::run_busy_poll() {
       if (timers_ != nullptr) deadline = timers_->next_deadline_ns();
     }
     if (g_stop_signal.load(std::memory_order_relaxed) != 0 && take_stop_signal()) break;
-    if (now >= next_housekeeping) {
-      next_housekeeping = now + kHousekeepingNs;
-      if (options_.pcap != nullptr && now >= next_flush) {
-        options_.pcap->flush();
-        next_flush = now + kPcapFlushNs;
-      }
-    }
   }
   return 0;
 }

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -40,9 +41,9 @@ PcapWriter::PcapWriter(const std::string& path, size_t buffer_size)
   if (fd_ < 0) {
     throw std::runtime_error("cannot create pcap file " + path + ": " + std::strerror(errno));
   }
-  buf_ = std::make_unique<uint8_t[]>(cap_);
+  ring_ = std::make_unique<uint8_t[]>(cap_);
   // Global header, written in our byte order (little-endian); readers detect the order from
-  // the magic number.
+  // the magic number. It goes out at once so a file is valid (if empty) from the start.
   uint8_t h[kFileHeaderSize]{};
   put_u32(h + 0, kMagicNanoseconds);
   put_u16(h + 4, 2);  // version 2.4
@@ -51,16 +52,20 @@ PcapWriter::PcapWriter(const std::string& path, size_t buffer_size)
   put_u32(h + 12, 0);  // sigfigs
   put_u32(h + 16, kSnapLen);
   put_u32(h + 20, kLinkTypeEthernet);
-  append(h, sizeof(h));
-  // The header goes out at once so a file is valid (if empty) from the start.
-  if (!flush()) {
+  if (!write_all(fd_, h, sizeof(h))) {
+    const int err = errno;
     ::close(fd_);
-    throw std::runtime_error("cannot write pcap file " + path + ": " + std::strerror(errno));
+    throw std::runtime_error("cannot write pcap file " + path + ": " + std::strerror(err));
   }
 }
 
 PcapWriter::~PcapWriter() {
   close();
+}
+
+void PcapWriter::start() {
+  if (thread_.joinable() || fd_ < 0) return;
+  thread_ = std::thread([this] { run(); });
 }
 
 void PcapWriter::write(std::span<const uint8_t> frame) {
@@ -71,42 +76,84 @@ void PcapWriter::write(std::span<const uint8_t> frame) {
 }
 
 void PcapWriter::write(std::span<const uint8_t> frame, uint64_t unix_time_ns) {
-  if (fd_ < 0 || failed_) return;
+  if (fd_ < 0 || failed_.load(std::memory_order_relaxed)) return;
   const uint32_t incl = static_cast<uint32_t>(std::min<size_t>(frame.size(), kSnapLen));
+  const size_t need = kRecordHeaderSize + incl;
+  uint64_t head = head_.load(std::memory_order_relaxed);
+  if (cap_ - (head - tail_.load(std::memory_order_acquire)) < need) {
+    if (thread_.joinable() || need > cap_) {
+      dropped_.fetch_add(1, std::memory_order_relaxed);  // never wait on the device thread
+      return;
+    }
+    drain();  // no writer thread (tools, tests): write out here
+  }
   uint8_t h[kRecordHeaderSize];
   put_u32(h + 0, static_cast<uint32_t>(unix_time_ns / 1000000000ull));
   put_u32(h + 4, static_cast<uint32_t>(unix_time_ns % 1000000000ull));
   put_u32(h + 8, incl);
   put_u32(h + 12, static_cast<uint32_t>(frame.size()));
-  append(h, sizeof(h));
-  append(frame.data(), incl);
+  auto copy_in = [&](uint64_t at, const uint8_t* data, size_t len) {
+    const size_t pos = static_cast<size_t>(at % cap_);
+    const size_t first = std::min(len, cap_ - pos);
+    std::memcpy(ring_.get() + pos, data, first);
+    std::memcpy(ring_.get(), data + first, len - first);
+  };
+  copy_in(head, h, sizeof(h));
+  copy_in(head + sizeof(h), frame.data(), incl);
+  head_.store(head + need, std::memory_order_release);
   ++frames_;
 }
 
-void PcapWriter::append(const uint8_t* data, size_t len) {
-  if (used_ + len > cap_) {
-    if (!flush()) return;
-    if (len > cap_) {
-      // Larger than the whole buffer (tiny buffer and a jumbo frame): straight through.
-      if (!write_all(fd_, data, len)) failed_ = true;
-      return;
-    }
+void PcapWriter::drain() {
+  const uint64_t head = head_.load(std::memory_order_acquire);
+  const uint64_t tail = tail_.load(std::memory_order_relaxed);
+  if (head == tail || fd_ < 0) return;
+  const size_t pos = static_cast<size_t>(tail % cap_);
+  const size_t len = static_cast<size_t>(head - tail);
+  const size_t first = std::min(len, cap_ - pos);
+  if (!failed_.load() &&
+      (!write_all(fd_, ring_.get() + pos, first) || !write_all(fd_, ring_.get(), len - first))) {
+    failed_.store(true);
   }
-  std::memcpy(buf_.get() + used_, data, len);
-  used_ += len;
+  tail_.store(head, std::memory_order_release);
+}
+
+void PcapWriter::run() {
+  std::unique_lock lock(mutex_);
+  for (;;) {
+    cv_.wait_for(lock, kWritePeriod, [this] { return stop_ || flush_requested_; });
+    drain();
+    flush_requested_ = false;
+    cv_.notify_all();
+    if (stop_) return;
+  }
 }
 
 bool PcapWriter::flush() {
   if (fd_ < 0) return false;
-  if (failed_) return false;
-  if (used_ > 0 && !write_all(fd_, buf_.get(), used_)) failed_ = true;
-  used_ = 0;
-  return !failed_;
+  std::unique_lock lock(mutex_);
+  if (!thread_.joinable()) {
+    drain();
+  } else {
+    const uint64_t target = head_.load(std::memory_order_acquire);
+    flush_requested_ = true;
+    cv_.notify_all();
+    cv_.wait(lock, [&] { return tail_.load(std::memory_order_acquire) >= target; });
+  }
+  return !failed_.load();
 }
 
 void PcapWriter::close() {
   if (fd_ < 0) return;
-  flush();
+  if (thread_.joinable()) {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  drain();
   ::close(fd_);
   fd_ = -1;
 }

@@ -45,6 +45,8 @@ int Runner::open(const char* program, FILE* err) {
       return kExitUsage;
     }
   }
+  // The capture's writer thread starts only now: no thread may predate the drop.
+  if (pcap_) pcap_->start();
   try {
     loop_ = std::make_unique<EventLoop>(
         *link_,

@@ -2,11 +2,17 @@
 // 24-byte global header, 16-byte record headers), which Wireshark and tshark open.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "ecat/host/pcap_writer.hpp"
@@ -84,6 +90,63 @@ TEST(LinkPcap, UnwritablePathIsAnErrorNamingTheFile) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/x.pcap"), std::string::npos);
   }
+}
+
+}  // namespace
+}  // namespace rackcat::ecat
+
+namespace rackcat::ecat {
+namespace {
+
+// Issue 14 item 9: with its writer thread running, a full ring drops and counts frames; the
+// device thread's write() never waits. The file is a FIFO nobody reads, so the writer blocks.
+TEST(LinkPcap, AFullRingDropsAndCountsInsteadOfBlocking) {
+  const auto path = temp_path("blocked.fifo");
+  std::remove(path.c_str());
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  const int reader = ::open(path.c_str(), O_RDONLY | O_NONBLOCK);  // lets the writer open
+  ASSERT_GE(reader, 0);
+  {
+    PcapWriter w(path, 64 * 1024);
+    w.start();
+    std::vector<uint8_t> frame(1000, 0xA5);
+    auto worst = std::chrono::nanoseconds(0);
+    for (int i = 0; i < 2000; ++i) {  // 2 MB: far more than the pipe and the ring hold
+      const auto t0 = std::chrono::steady_clock::now();
+      w.write(frame, 1);
+      worst = std::max(worst, std::chrono::steady_clock::now() - t0);
+    }
+    EXPECT_GT(w.dropped(), 0u);
+    EXPECT_EQ(w.frames_written() + w.dropped(), 2000u);
+    EXPECT_LT(worst, std::chrono::milliseconds(5));
+    // Unblock the writer so it can finish: read everything until it closes.
+    std::thread drain([reader] {
+      char buf[65536];
+      for (;;) {
+        const ssize_t n = ::read(reader, buf, sizeof buf);
+        if (n == 0) break;
+        if (n < 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+    });
+    w.close();
+    drain.join();
+  }
+  ::close(reader);
+  std::remove(path.c_str());
+}
+
+// The writer thread writes on its own: records reach the file within a few write periods
+// without any flush() (what survives a SIGKILL).
+TEST(LinkPcap, TheWriterThreadWritesWithoutFlush) {
+  const auto path = temp_path("periodic.pcap");
+  PcapWriter w(path);
+  w.start();
+  std::vector<uint8_t> frame(60, 0x11);
+  for (int i = 0; i < 10; ++i) w.write(frame, 1);
+  std::this_thread::sleep_for(PcapWriter::kWritePeriod * 5);
+  EXPECT_EQ(read_file(path).size(), 24u + 10u * 76u);
+  w.close();
+  std::remove(path.c_str());
 }
 
 }  // namespace

@@ -312,3 +312,43 @@ def test_vlan_tagged_request_is_answered_tagged(rackcat):
     assert vlan == (0x8100, tci), f"answered untagged or with another tag: {vlan}"
     assert len(data) + 4 == len(frame), f"answer {len(data) + 4} bytes, request {len(frame)}"
     assert struct.unpack("<H", data[14 + 2 + 10 + 2:14 + 2 + 10 + 4])[0] == 1  # WKC: one slave
+
+
+# --- issue 14 item 9: kill -9 loses at most 100 ms of capture ----------------------------------
+
+def _pcap_times(path):
+    data = Path(path).read_bytes()
+    assert data[:4] == struct.pack("<I", 0xA1B23C4D), "not a nanosecond pcap"
+    times = []
+    pos = 24
+    while pos + 16 <= len(data):
+        sec, nsec, incl, _ = struct.unpack("<IIII", data[pos:pos + 16])
+        if pos + 16 + incl > len(data):
+            break  # a record cut by the kill
+        times.append(sec + nsec / 1e9)
+        pos += 16 + incl
+    return times
+
+
+def test_kill_9_loses_at_most_100_ms_of_capture(rackcat):
+    import signal
+    rc = rackcat(pcap=True)
+    master = open_master(rc.iface, 1)
+    try:
+        master.config_map()
+        go(master, pysoem.SAFEOP_STATE)
+        end = time.monotonic() + 1.5
+        while time.monotonic() < end:
+            master.send_processdata()
+            master.receive_processdata(20_000)
+            time.sleep(0.001)
+        last_sent = time.time()
+        os.kill(rc.proc.proc.pid, signal.SIGKILL)
+        rc.proc.proc.wait(timeout=10)
+    finally:
+        master.close()
+    times = _pcap_times(rc.pcap)
+    assert len(times) > 500, f"only {len(times)} frames captured"
+    lost = last_sent - times[-1]
+    print(f"capture: {len(times)} frames, last one {lost * 1000:.1f} ms before the kill")
+    assert lost <= 0.100, f"{lost * 1000:.0f} ms of frames lost on kill -9"
