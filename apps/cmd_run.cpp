@@ -26,6 +26,7 @@
 #include "mdp/file_root.hpp"
 #include "mdp/rack_config.hpp"
 #include "mdp/state_directory.hpp"
+#include "mdp/sync_manager_layout.hpp"
 #include "modules/canopen/socketcan.hpp"
 #include "modules/control/control_api.hpp"
 #include "modules/rim/threaded_link.hpp"
@@ -46,14 +47,18 @@ struct RunArgs {
   std::string user;
   std::string data_dir;  // replay files named by control-API requests are read below it
   std::string rim_bus;   // "can:IFACE": RIMs are CANopen nodes on that bus (docs/CAN.md)
+  uint16_t boot_mailbox_size = mdp::sm::kBootMailboxSize;
+  std::optional<uint32_t> foe_password;
 };
 
 int run(const RunArgs& a) {
   // The configuration first: a bad file must not need a network interface to be reported.
   std::vector<std::unique_ptr<RackSlave>> racks;
   const std::string state_dir = a.state_dir.empty() ? mdp::default_state_dir() : a.state_dir;
-  const auto config = load_rack_or_report(a.config);
+  auto config = load_rack_or_report(a.config);
   if (!config) return ecat::kExitUsage;
+  config->control.boot_mailbox_size = a.boot_mailbox_size;
+  if (a.foe_password) config->control.foe_password = *a.foe_password;
 
   // Socket and capture file first, then the drop, before any thread exists.
   ecat::Runner runner({.interface_name = a.iface,
@@ -106,8 +111,9 @@ int run(const RunArgs& a) {
   std::printf("rackcat: %d slave(s) on %s (%s), rack %s: %zu RIM(s), %zu module(s)\n", a.slaves,
               a.iface.c_str(), a.busy_poll ? "busy-poll" : "blocking", cfg.source.c_str(),
               cfg.rims.size(), cfg.modules.size());
-  std::printf("rackcat: state directory %s; %s\n", state_dir.c_str(),
-              racks.front()->device().load_report().c_str());
+  std::printf("rackcat: state directory %s; %s; %s\n", state_dir.c_str(),
+              racks.front()->device().load_report().c_str(),
+              racks.front()->device().firmware_report().c_str());
   for (size_t i = 1; i < racks.size(); ++i) {
     std::printf("rackcat: slave %zu: %s\n", i, racks[i]->device().load_report().c_str());
   }
@@ -202,6 +208,11 @@ void add_run(CLI::App& app) {
         return v.rfind("can:", 0) == 0 && v.size() > 4 ? std::string()
                                                        : std::string("expected can:IFACE");
       });
+  cmd->add_option("--boot-mailbox-size", args->boot_mailbox_size,
+                  "bytes of the bootstrap mailbox SM0 and SM1 (BOOT state, FoE); default 512")
+      ->check(CLI::Range(mdp::sm::kMinMailboxSize, mdp::sm::kMaxMailboxSize));
+  cmd->add_option("--foe-password", args->foe_password,
+                  "password FoE requests must carry (UINT32, 0x.. accepted; docs/FOE.md)");
   cmd->callback([args] { exit_with(run(*args)); });
 }
 

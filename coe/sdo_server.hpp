@@ -65,6 +65,13 @@ class SdoServer {
 
   const ObjectDictionary& dictionary() const { return od_; }
 
+  // The counter for a message another mailbox protocol of this slave sends (FoE): one
+  // sequence 1..7 for every message the slave sends (ETG.1000.4 §5.6).
+  uint8_t next_counter() {
+    counter_ = next_mailbox_counter(counter_);
+    return counter_;
+  }
+
  private:
   enum class TransferKind : uint8_t { None, Upload, Download };
   struct Transfer {

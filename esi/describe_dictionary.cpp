@@ -126,6 +126,8 @@ DeviceDescription describe_dictionary(const coe::ObjectDictionary& od, const Dev
       {SmType::ProcessIn, plan.inputs_start, in_bytes, 0, plan.max_process_data_bytes,
        plan.inputs_control, in_bytes > 0},
   };
+  d.foe = plan.foe;
+  d.bootstrap = {plan.boot_out_start, plan.boot_out_size, plan.boot_in_start, plan.boot_in_size};
   // FMMU0 outputs, FMMU1 inputs, FMMU2 mailbox status (SOEM 2.x maps 0x080D with it).
   d.fmmus = {FmmuUsage::Outputs, FmmuUsage::Inputs, FmmuUsage::SmStatus};
   // The three synchronisation modes of 0x1C32:04 (ETG.1020 §8): free run, SM2 event, SYNC0.

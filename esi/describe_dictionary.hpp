@@ -25,6 +25,9 @@ struct SmPlan {
   uint16_t inputs_start = 0x5100;
   uint8_t inputs_control = 0x20;
   uint16_t max_process_data_bytes = 0x4000;
+  bool foe = false;
+  uint16_t boot_out_start = 0, boot_out_size = 0;  // bootstrap mailbox; sizes 0: no BOOT
+  uint16_t boot_in_start = 0, boot_in_size = 0;
 };
 
 // Texts the dictionary does not carry (or carries under a device-specific index).

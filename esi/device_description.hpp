@@ -86,6 +86,13 @@ struct EscConfigArea {
   uint16_t station_alias = 0x0000;  // 0x0012
 };
 
+// The bootstrap mailbox (SII words 0x14-0x17, ESI Eeprom/BootStrap; ETG.2010 Table 2): all 0
+// for a device without BOOT state.
+struct BootstrapMailbox {
+  uint16_t receive_offset = 0, receive_size = 0;  // SM0 in BOOT
+  uint16_t send_offset = 0, send_size = 0;        // SM1 in BOOT
+};
+
 struct DeviceDescription {
   // Identity, equal to 0x1018:01..04.
   uint32_t vendor_id = 0;
@@ -101,6 +108,8 @@ struct DeviceDescription {
 
   EscConfigArea config;
   CoeDetails coe;
+  bool foe = false;  // FoE (SII word 0x1C bit 3, ESI Mailbox/FoE)
+  BootstrapMailbox bootstrap;
   int16_t ebus_current_ma = 0;
   uint16_t physical_ports = 0x0011;  // ports 0 and 1 MII (ETG.2010 Table 6 "Physical Port")
 

@@ -440,6 +440,7 @@ std::string write_esi(const EsiContent& c) {
   coe_node.append_attribute("PdoUpload").set_value(d.coe.upload_at_startup);
   coe_node.append_attribute("CompleteAccess").set_value(d.coe.complete_access);
   coe_node.append_attribute("SegmentedSdo").set_value(d.coe.segmented_sdo);
+  if (d.foe) mailbox.append_child("FoE");
 
   if (!d.dc_modes.empty()) {
     auto dc = device.append_child("Dc");
@@ -478,6 +479,16 @@ std::string write_esi(const EsiContent& c) {
   auto eeprom = device.append_child("Eeprom");
   eeprom.append_child("ByteSize").text().set(static_cast<unsigned long long>(c.eeprom_bytes));
   text_child(eeprom, "ConfigData", hex_bytes(c.config_data));
+  if (d.bootstrap.receive_size != 0) {
+    // SII words 0x14-0x17 as stored: receive offset, receive size, send offset, send size.
+    std::vector<uint8_t> boot;
+    for (uint16_t w : {d.bootstrap.receive_offset, d.bootstrap.receive_size,
+                       d.bootstrap.send_offset, d.bootstrap.send_size}) {
+      boot.push_back(static_cast<uint8_t>(w));
+      boot.push_back(static_cast<uint8_t>(w >> 8));
+    }
+    text_child(eeprom, "BootStrap", hex_bytes(boot));
+  }
 
   if (!c.modules.empty()) {
     auto modules = descriptions.append_child("Modules");

@@ -12,9 +12,14 @@
 namespace rackcat::esi {
 namespace {
 
-SmPlan rack_sm_plan() {
+SmPlan rack_sm_plan(const mdp::RackConfig& config) {
   namespace sm = mdp::sm;
   SmPlan p;
+  p.foe = true;
+  p.boot_out_start = sm::kBootMailboxOutStart;
+  p.boot_out_size = config.control.boot_mailbox_size;
+  p.boot_in_start = sm::kBootMailboxInStart;
+  p.boot_in_size = config.control.boot_mailbox_size;
   p.mailbox_out_start = sm::kMailboxOutStart;
   p.mailbox_out_size = sm::kMailboxOutSize;
   p.mailbox_out_control = sm::kMailboxOutControl;
@@ -68,7 +73,8 @@ PdoDescription relocate_pdo(PdoDescription p, uint16_t pdo_index, uint16_t offse
 }  // namespace
 
 DeviceDescription describe_device(const mdp::Device& device) {
-  return describe_dictionary(device.dictionary(), rack_texts(device.config()), rack_sm_plan());
+  return describe_dictionary(device.dictionary(), rack_texts(device.config()),
+                             rack_sm_plan(device.config()));
 }
 
 SiiImage build_sii(const mdp::Device& device) {

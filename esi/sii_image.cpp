@@ -201,20 +201,21 @@ SiiImage encode_sii(const DeviceDescription& d) {
   dword(sii::kRevision, d.revision);
   dword(sii::kSerial, d.serial);
 
-  // The mailbox words come from the SMs typed as mailboxes. The device has no separate
-  // bootstrap firmware (no BOOT state), so the bootstrap mailbox is the standard one.
+  // The standard mailbox words come from the SMs typed as mailboxes; the bootstrap words from
+  // the device's bootstrap mailbox (all 0 without BOOT: the ESM then refuses BOOT with 0x0013).
+  word(sii::kBootstrapReceiveOffset, d.bootstrap.receive_offset);
+  word(sii::kBootstrapReceiveSize, d.bootstrap.receive_size);
+  word(sii::kBootstrapSendOffset, d.bootstrap.send_offset);
+  word(sii::kBootstrapSendSize, d.bootstrap.send_size);
   const auto* rx = find_sm(d, SmType::MailboxOut);
   const auto* tx = find_sm(d, SmType::MailboxIn);
   if (rx && tx) {
-    word(sii::kBootstrapReceiveOffset, rx->start);
-    word(sii::kBootstrapReceiveSize, rx->default_size);
-    word(sii::kBootstrapSendOffset, tx->start);
-    word(sii::kBootstrapSendSize, tx->default_size);
     word(sii::kStandardReceiveOffset, rx->start);
     word(sii::kStandardReceiveSize, rx->default_size);
     word(sii::kStandardSendOffset, tx->start);
     word(sii::kStandardSendSize, tx->default_size);
-    word(sii::kMailboxProtocol, d.coe.sdo ? sii::kProtoCoE : 0);
+    word(sii::kMailboxProtocol,
+         static_cast<uint16_t>((d.coe.sdo ? sii::kProtoCoE : 0) | (d.foe ? sii::kProtoFoE : 0)));
   }
   word(sii::kVersion, 1);
 

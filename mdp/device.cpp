@@ -11,10 +11,16 @@
 #include <ctime>
 
 #include "coe/bits.hpp"
+#include "coe/mailbox_error.hpp"
+#include "coe/mailbox_header.hpp"
 #include "coe/process_image.hpp"
 #include "coe/sdo_server.hpp"
+#include "foe/foe_server.hpp"
 #include "mdp/command_bytes.hpp"
 #include "mdp/diagnosis_catalogue.hpp"
+#include "mdp/file_access.hpp"
+#include "mdp/firmware_image.hpp"
+#include "mdp/firmware_store.hpp"
 #include "mdp/object_dictionary_builder.hpp"
 #include "mdp/parameter_set.hpp"
 #include "mdp/parameter_store.hpp"
@@ -65,7 +71,13 @@ struct Device::Impl {
   std::shared_ptr<StateDirectory> dir;
   std::unique_ptr<ParameterStore> store;
   std::unique_ptr<ParameterWriter> writer;  // after `store`: destroyed (and flushed) first
-  std::vector<uint8_t> default_payload;     // the parameter set as shipped (factory defaults)
+  std::unique_ptr<FirmwareStore> firmware;
+  std::unique_ptr<FileAccess> files;
+  std::unique_ptr<foe::FoeServer> foe;    // after `files` and `firmware`: destroyed first
+  std::vector<uint8_t> running_firmware;  // the container the device "runs" since power-on
+  std::string firmware_report;
+  std::vector<uint8_t> last_foe_request;  // double-write detection of FoE requests
+  std::vector<uint8_t> default_payload;   // the parameter set as shipped (factory defaults)
   std::string state_dir;
   std::string load_report;
   EsmState state = EsmState::Init;
@@ -269,6 +281,119 @@ struct Device::Impl {
     }
     return r;
   }
+
+  // --- firmware and FoE (file_access.hpp) --------------------------------------------------
+  // At power-on: the installed firmware container, if valid, sets the version objects and the
+  // SII revision; else the built-in version runs (as a container with an empty payload).
+  void load_firmware() {
+    firmware = std::make_unique<FirmwareStore>(dir);
+    std::string detail;
+    auto& cm = config.control;
+    if (auto bytes = firmware->read_installed(kMaxFirmwareFile, detail)) {
+      FirmwareInfo info;
+      if (verify_firmware(*bytes, cm.vendor_id, cm.product_code, info, detail) ==
+          foe::FoeError::None) {
+        cm.revision = info.revision;
+        cm.software_version = info.software_version;
+        if (!info.short_version.empty()) cm.firmware_version = info.short_version;
+        running_firmware = std::move(*bytes);
+        firmware_report = "firmware " + cm.software_version + " from " + firmware->path();
+        return;
+      }
+      firmware_report = "ignored firmware " + firmware->path() + ": " + detail + "; ";
+    }
+    FirmwareInfo built_in{cm.vendor_id, cm.product_code, cm.revision, cm.software_version,
+                          cm.firmware_version.substr(0, kFirmwareShortVersionMax)};
+    std::string error;
+    running_firmware = pack_firmware(built_in, {}, error).value_or(std::vector<uint8_t>{});
+    firmware_report += "firmware " + cm.software_version + " (built in)";
+  }
+
+  std::vector<uint8_t> parameter_file() {
+    writer->wait_idle();
+    return ParameterStore::encode(params->fingerprint(), stored_payload());
+  }
+
+  foe::FoeError restore_parameters(std::span<const uint8_t> file, std::string& detail) {
+    std::vector<uint8_t> payload;
+    switch (ParameterStore::decode(file, params->fingerprint(), payload, detail, "over FoE")) {
+      case ParameterStore::LoadResult::Loaded:
+        break;
+      case ParameterStore::LoadResult::Foreign:
+        return foe::FoeError::FileIncompatible;
+      default:
+        return foe::FoeError::WrongChecksum;
+    }
+    // Checked as an SDO write of the same values would be (as stored files are at load).
+    if (const std::string why = params->check(payload); !why.empty()) {
+      detail = "parameter file over FoE: " + why;
+      return foe::FoeError::Illegal;
+    }
+    writer->wait_idle();
+    std::string error;
+    if (!store->save(params->fingerprint(), payload, error)) {
+      detail = error;
+      return foe::FoeError::FlashProblem;
+    }
+    params->apply(payload);
+    image->compile();
+    notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
+    detail = "restored parameters over FoE";
+    return foe::FoeError::None;
+  }
+
+  void start_foe(uint32_t password) {
+    FileAccessHooks hooks;
+    hooks.state = [this] { return state; };
+    hooks.parameter_file = [this] { return parameter_file(); };
+    hooks.restore_parameters = [this](std::span<const uint8_t> f, std::string& detail) {
+      return restore_parameters(f, detail);
+    };
+    hooks.running_firmware = [this] { return running_firmware; };
+    const uint32_t vendor = config.control.vendor_id, product = config.control.product_code;
+    hooks.verify_firmware = [vendor, product](std::span<const uint8_t> f, std::string& detail) {
+      FirmwareInfo info;
+      return verify_firmware(f, vendor, product, info, detail);
+    };
+    hooks.log = [](const std::string& line) {
+      std::fprintf(stderr, "rackcat: %s\n", line.c_str());
+    };
+    files = std::make_unique<FileAccess>(*firmware, password, std::move(hooks));
+    foe::FoeLimits limits;
+    limits.max_file_size = kMaxFirmwareFile;
+    foe = std::make_unique<foe::FoeServer>(*files, limits);
+  }
+
+  // One FoE mailbox request (mailbox type 4): the mailbox header here, the protocol in foe.
+  size_t foe_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
+    const auto hdr = *coe::MailboxHeader::decode(request);
+    auto mailbox_error = [&](coe::MailboxError e) {
+      return coe::write_mailbox_error(reply, e, hdr.address, sdo->next_counter());
+    };
+    if (hdr.length > request.size() - coe::MailboxHeader::kSize) {
+      return mailbox_error(coe::MailboxError::InvalidSize);
+    }
+    const auto msg = request.first(coe::MailboxHeader::kSize + hdr.length);
+    // A double write (ETG.1000.4 §5.6): the same counter and bytes again are dropped.
+    if (hdr.counter != 0 && msg.size() == last_foe_request.size() &&
+        std::equal(msg.begin(), msg.end(), last_foe_request.begin())) {
+      return 0;
+    }
+    last_foe_request.assign(msg.begin(), msg.end());
+    if (hdr.channel != 0) return mailbox_error(coe::MailboxError::InvalidChannel);
+    if (reply.size() < coe::MailboxHeader::kSize + foe::FoeHeader::kSize) return 0;
+    const auto r = foe->handle(msg.subspan(coe::MailboxHeader::kSize),
+                               request.size() - coe::MailboxHeader::kSize,
+                               reply.subspan(coe::MailboxHeader::kSize));
+    if (r.too_short) return mailbox_error(coe::MailboxError::SizeTooShort);
+    if (r.length == 0) return 0;
+    coe::MailboxHeader out;
+    out.length = static_cast<uint16_t>(r.length);
+    out.type = static_cast<uint8_t>(coe::MailboxType::FoE);
+    out.counter = sdo->next_counter();
+    out.encode(reply);
+    return coe::MailboxHeader::kSize + r.length;
+  }
 };
 
 void Device::Impl::install_hooks() {
@@ -395,13 +520,14 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.self = this;
   d.config = std::move(config);
   d.listeners.reserve(16);
-  build_object_dictionary(d.config, d.od);
-  d.params = std::make_unique<ParameterSet>(d.od, d.config);
-  d.default_payload = d.params->capture();
   d.dir = options.state ? std::move(options.state)
                         : StateDirectory::open(options.state_dir.empty() ? default_state_dir()
                                                                          : options.state_dir);
   d.state_dir = d.dir->path();
+  d.load_firmware();  // before the dictionary: the firmware's version is what it reports
+  build_object_dictionary(d.config, d.od);
+  d.params = std::make_unique<ParameterSet>(d.od, d.config);
+  d.default_payload = d.params->capture();
   d.store = std::make_unique<ParameterStore>(d.dir);
   d.writer = std::make_unique<ParameterWriter>(*d.store);
   d.image = std::make_unique<coe::ProcessImage>(d.od);
@@ -414,6 +540,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   }
   d.image->compile();
   d.sdo = std::make_unique<coe::SdoServer>(d.od);
+  d.start_foe(d.config.control.foe_password);
 }
 
 Device::~Device() = default;
@@ -432,11 +559,20 @@ std::span<const Module> Device::modules() const {
 }
 
 size_t Device::handle_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
-  return impl_->sdo->handle(request, reply, impl_->state);
+  Impl& d = *impl_;
+  const auto hdr = coe::MailboxHeader::decode(request);
+  if (hdr && hdr->mailbox_type() == coe::MailboxType::FoE) return d.foe_mailbox(request, reply);
+  // BOOT serves FoE only (ETG.1000.6 §5.3 "Bootstrap"): any other protocol is not supported.
+  if (hdr && d.state == EsmState::Boot) {
+    return coe::write_mailbox_error(reply, coe::MailboxError::UnsupportedProtocol, hdr->address,
+                                    d.sdo->next_counter());
+  }
+  return d.sdo->handle(request, reply, d.state);
 }
 
 size_t Device::poll_mailbox(std::span<uint8_t> reply) {
   impl_->complete_jobs();
+  impl_->foe->tick();
   return impl_->sdo->poll(reply);
 }
 
@@ -493,7 +629,11 @@ uint16_t Device::request_state(EsmState from, EsmState to) {
 void Device::state_changed(EsmState from, EsmState to) {
   Impl& d = *impl_;
   d.state = to;
-  if (to == EsmState::Init) d.sdo->reset();
+  if (to == EsmState::Init) {
+    d.sdo->reset();
+    d.foe->reset();
+    d.last_foe_request.clear();
+  }
   if (to == EsmState::SafeOp && from == EsmState::PreOp) d.image->compile();
   d.notify([&](CycleListener& l) { l.on_state_changed(*this, from, to); });
 }
@@ -564,6 +704,9 @@ std::string Device::parameter_file() const {
 }
 const std::string& Device::load_report() const {
   return impl_->load_report;
+}
+const std::string& Device::firmware_report() const {
+  return impl_->firmware_report;
 }
 
 }  // namespace rackcat::mdp

@@ -150,6 +150,8 @@ class Device {
   // One line describing what happened to the stored file at the last load ("loaded 12
   // parameters from ...", "ignored corrupt parameter file ...: reason", "no stored parameters").
   const std::string& load_report() const;
+  // What runs: "firmware 1.09.6 (revision 0x00010009, built in)" or the installed file's.
+  const std::string& firmware_report() const;
 
  private:
   struct Impl;

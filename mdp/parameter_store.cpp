@@ -60,27 +60,34 @@ ParameterStore::LoadResult ParameterStore::load(uint32_t fingerprint, std::vecto
     case StateDirectory::ReadResult::Ok:
       break;
   }
+  return decode(bytes, fingerprint, payload, detail, path());
+}
+
+ParameterStore::LoadResult ParameterStore::decode(std::span<const uint8_t> bytes,
+                                                  uint32_t fingerprint,
+                                                  std::vector<uint8_t>& payload,
+                                                  std::string& detail, const std::string& source) {
   if (bytes.size() < kHeader + 4 || std::memcmp(bytes.data(), kMagic, 8) != 0) {
-    detail = "ignored foreign parameter file " + path() + ": not a rackcat parameter file";
+    detail = "ignored foreign parameter file " + source + ": not a rackcat parameter file";
     return LoadResult::Foreign;
   }
   const uint32_t length = get32(&bytes[16]);
   if (bytes.size() != kHeader + static_cast<size_t>(length) + 4) {
-    detail = "ignored corrupt parameter file " + path() + ": length " +
+    detail = "ignored corrupt parameter file " + source + ": length " +
              std::to_string(bytes.size()) + " does not match its header";
     return LoadResult::Corrupt;
   }
   if (crc32_of(bytes.data(), kHeader + length) != get32(&bytes[kHeader + length])) {
-    detail = "ignored corrupt parameter file " + path() + ": checksum mismatch";
+    detail = "ignored corrupt parameter file " + source + ": checksum mismatch";
     return LoadResult::Corrupt;
   }
   if (get32(&bytes[8]) != kVersion || get32(&bytes[12]) != fingerprint) {
-    detail = "ignored foreign parameter file " + path() +
+    detail = "ignored foreign parameter file " + source +
              ": written for another rack configuration or format";
     return LoadResult::Foreign;
   }
   payload.assign(bytes.begin() + kHeader, bytes.begin() + static_cast<long>(kHeader + length));
-  detail = "loaded stored parameters from " + path();
+  detail = "loaded stored parameters from " + source;
   return LoadResult::Loaded;
 }
 

@@ -42,6 +42,11 @@ class ParameterStore {
   bool remove(std::string& error) const;
 
   static std::vector<uint8_t> encode(uint32_t fingerprint, std::span<const uint8_t> payload);
+  // Checks the bytes of a parameter file (as load() does with the stored one); `source` names
+  // it in `detail`. Corrupt: length or CRC-32 wrong; Foreign: magic, format or fingerprint.
+  static LoadResult decode(std::span<const uint8_t> bytes, uint32_t fingerprint,
+                           std::vector<uint8_t>& payload, std::string& detail,
+                           const std::string& source);
 
  private:
   std::shared_ptr<const StateDirectory> dir_;

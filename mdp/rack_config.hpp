@@ -58,6 +58,10 @@ struct ControlModule {
   std::string hardware_version = "1.0";                      // 0x1009
   std::string software_version = "1.09.6";                   // 0x100A
   std::string bootloader_version = "1.09.0";                 // 0x100B string(6)
+  uint16_t boot_mailbox_size = 512;  // bootstrap SM0/SM1 bytes (mdp/sync_manager_layout.hpp)
+  // The password every FoE read and write request must carry (docs/FOE.md); the default is
+  // "RCFW" read as a big-endian UINT32.
+  uint32_t foe_password = 0x52434657;
   int line = 0;
 };
 

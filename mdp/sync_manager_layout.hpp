@@ -18,6 +18,14 @@ inline constexpr uint8_t kMailboxOutControl = 0x26;  // mailbox, written by mast
 inline constexpr uint16_t kMailboxInStart = 0x1080;
 inline constexpr uint16_t kMailboxInSize = 128;
 inline constexpr uint8_t kMailboxInControl = 0x22;  // mailbox, read by master, PDI irq
+// The bootstrap mailbox (BOOT state, ETG.1000.6 §5.3; SII words 0x14-0x17, ESI Eeprom/BootStrap):
+// SM0 and SM1 of their own, sized by the rack (ControlModule::boot_mailbox_size, default
+// kBootMailboxSize, at most kMaxMailboxSize: one datagram in one frame).
+inline constexpr uint16_t kBootMailboxOutStart = 0x1000;
+inline constexpr uint16_t kBootMailboxInStart = 0x1600;
+inline constexpr uint16_t kBootMailboxSize = 512;
+inline constexpr uint16_t kMaxMailboxSize = 1486;
+inline constexpr uint16_t kMinMailboxSize = 64;
 // SM2: process data outputs (RxPDOs, 0x1C12).
 inline constexpr uint16_t kOutputsStart = 0x1100;
 inline constexpr uint8_t kOutputsControl = 0x64;  // buffered, written by master, irq, watchdog

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "esi/rack.hpp"
+#include "esi/sii_image.hpp"
 #include "esi/sii_parser.hpp"
 #include "mdp/card_catalogue.hpp"
 #include "mdp/device.hpp"
@@ -100,6 +101,18 @@ TEST_P(RackEsi, SiiMailboxAndSmsEqualEsiSmAndTheEsmChecks) {
   ASSERT_EQ(config.size(), 32u);
   for (size_t i = 0; i < 16; ++i)
     EXPECT_EQ(std::stoul(config.substr(2 * i, 2), nullptr, 16), img.bytes[i]) << i;
+  // The bootstrap mailbox (ETG.2010 Table 2 words 0x14-0x17) is the device's own: SM0/SM1 of
+  // BOOT, and the ESI Eeprom/BootStrap holds the same 8 bytes; FoE is announced in both.
+  EXPECT_EQ(info.bootstrap_receive_offset, mdp::sm::kBootMailboxOutStart);
+  EXPECT_EQ(info.bootstrap_receive_size, mdp::sm::kBootMailboxSize);
+  EXPECT_EQ(info.bootstrap_send_offset, mdp::sm::kBootMailboxInStart);
+  EXPECT_EQ(info.bootstrap_send_size, mdp::sm::kBootMailboxSize);
+  std::string boot = eeprom.child_value("BootStrap");
+  ASSERT_EQ(boot.size(), 16u);
+  for (size_t i = 0; i < 8; ++i)
+    EXPECT_EQ(std::stoul(boot.substr(2 * i, 2), nullptr, 16), img.bytes[2 * 0x14 + i]) << i;
+  EXPECT_EQ(info.mailbox_protocol, sii::kProtoCoE | sii::kProtoFoE);
+  EXPECT_TRUE(doc.select_node("//Devices/Device/Mailbox/FoE"));
 }
 
 TEST_P(RackEsi, SiiPdoCategoriesListTheAssignedPdosInOrder) {

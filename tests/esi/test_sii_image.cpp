@@ -68,11 +68,12 @@ TEST(SiiImage, HeaderWordsCarryIdentityMailboxAndVersion) {
   EXPECT_EQ(word(img, 0x0D), testing::kRevision >> 16);
   EXPECT_EQ(word(img, 0x0E), testing::kSerial & 0xFFFF);
   EXPECT_EQ(word(img, 0x0F), testing::kSerial >> 16);
-  // Receive mailbox = SM0 (master -> slave), send mailbox = SM1; bootstrap the same.
-  EXPECT_EQ(word(img, 0x14), 0x1000);
-  EXPECT_EQ(word(img, 0x15), 128);
-  EXPECT_EQ(word(img, 0x16), 0x1080);
-  EXPECT_EQ(word(img, 0x17), 128);
+  // Receive mailbox = SM0 (master -> slave), send mailbox = SM1. No BOOT state: bootstrap
+  // words 0 (the ESM refuses INIT->BOOT with 0x0013, ETG.1000.6 Table 11).
+  EXPECT_EQ(word(img, 0x14), 0);
+  EXPECT_EQ(word(img, 0x15), 0);
+  EXPECT_EQ(word(img, 0x16), 0);
+  EXPECT_EQ(word(img, 0x17), 0);
   EXPECT_EQ(word(img, 0x18), 0x1000);
   EXPECT_EQ(word(img, 0x19), 128);
   EXPECT_EQ(word(img, 0x1A), 0x1080);
@@ -83,6 +84,21 @@ TEST(SiiImage, HeaderWordsCarryIdentityMailboxAndVersion) {
   EXPECT_EQ((word(img, 0x3E) + 1u) * 128u, img.bytes.size());
   EXPECT_EQ(img.bytes.size() & (img.bytes.size() - 1), 0u);
   EXPECT_EQ(img.bytes.back(), 0xFF);
+}
+
+// A device with BOOT (ETG.2010 Table 2 words 0x14-0x17) and FoE (word 0x1C bit 3).
+TEST(SiiImage, BootstrapMailboxWordsAndFoeBit) {
+  auto d = sample_description();
+  d.foe = true;
+  d.bootstrap = {0x1000, 512, 0x1600, 512};
+  auto img = encode_sii(d);
+  EXPECT_EQ(word(img, 0x14), 0x1000);
+  EXPECT_EQ(word(img, 0x15), 512);
+  EXPECT_EQ(word(img, 0x16), 0x1600);
+  EXPECT_EQ(word(img, 0x17), 512);
+  EXPECT_EQ(word(img, 0x18), 0x1000);  // the standard mailbox is unchanged
+  EXPECT_EQ(word(img, 0x19), 128);
+  EXPECT_EQ(word(img, 0x1C), 0x000C);  // CoE | FoE
 }
 
 // General, FMMU, SyncManager and DC first (inside SOEM's 4 KiB SII cache whatever the rack
