@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "apps/commands.hpp"
-#include "apps/rack_loading.hpp"
+#include "apps/rack_slave/rack_loading.hpp"
 #include "mdp/firmware_image.hpp"
 #include "mdp/rack_config.hpp"
 

@@ -311,7 +311,15 @@ struct Device::Impl {
 
   std::vector<uint8_t> parameter_file() {
     writer->wait_idle();
-    return ParameterStore::encode(params->fingerprint(), stored_payload());
+    // The parameters as stored (what 0xFBF3 hashes): the stored file if it is valid, else the
+    // shipped defaults.
+    std::vector<uint8_t> payload;
+    std::string detail;
+    if (store->load(params->fingerprint(), payload, detail) != ParameterStore::LoadResult::Loaded ||
+        !refuse(payload).empty()) {
+      payload = default_payload;
+    }
+    return ParameterStore::encode(params->fingerprint(), payload);
   }
 
   foe::FoeError restore_parameters(std::span<const uint8_t> file, std::string& detail) {

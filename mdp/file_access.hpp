@@ -28,7 +28,7 @@ namespace rackcat::mdp {
 inline constexpr char kParameterFileName[] = "parameters.bin";
 inline constexpr size_t kMaxParameterFile = 64 * 1024;
 // The largest firmware file FoE takes (0x8003 Disk full beyond).
-inline constexpr size_t kMaxFirmwareFile = 16 * 1024 * 1024;
+inline constexpr size_t kMaxFirmwareFile = FirmwareStore::kMaxBytes;
 
 // What FileAccess needs from the device it serves.
 struct FileAccessHooks {

@@ -137,7 +137,7 @@ void FirmwareStore::commit(Verifier verify) {
   // Verify what is on disk, not what was meant to be written.
   std::vector<uint8_t> bytes;
   std::string detail;
-  if (dir_->read(kTmp, SIZE_MAX, bytes, detail) != StateDirectory::ReadResult::Ok) {
+  if (dir_->read(kTmp, kMaxBytes, bytes, detail) != StateDirectory::ReadResult::Ok) {
     return finish(foe::FoeError::FlashProblem, detail);
   }
   if (const foe::FoeError e = verify(bytes, detail); e != foe::FoeError::None) {

@@ -3,8 +3,9 @@
 // as it comes, then fsync(2), read back and verified, renameat(2)d over firmware.rfw and the
 // directory fsync(2)ed. Every file is opened relative to the state directory's descriptor
 // (state_directory.hpp) with O_NOFOLLOW (the temporary file with O_EXCL as well), so nothing
-// outside the directory is ever written and a planted link is refused, not followed. A kill -9 at any moment leaves the old
-// firmware.rfw or the new one; a leftover temporary file is removed at the next start.
+// outside the directory is ever written and a planted link is refused, not followed. A kill -9 at
+// any moment leaves the old firmware.rfw or the new one; a leftover temporary file is removed at
+// the next start.
 //
 // The commit (fsync, read back, SHA-256) runs on a worker thread: the mailbox keeps answering
 // (FoE Busy) meanwhile. One write at a time; all methods but poll_commit() belong to one thread.
@@ -27,6 +28,8 @@ namespace rackcat::mdp {
 
 class FirmwareStore {
  public:
+  // The largest file the store reads back (the FoE limit, file_access.hpp, is the same).
+  static constexpr size_t kMaxBytes = 16 * 1024 * 1024;
   // Checks a complete candidate file; returns the FoE error that refuses it (None accepts).
   using Verifier = std::function<foe::FoeError(std::span<const uint8_t>, std::string& detail)>;
 

@@ -35,6 +35,7 @@ def main():
     os.environ["RACKCAT_BUILD_DIR"] = args.build_dir
     import pysoem
     from conftest import SlaveProcess, VethNamespace
+    from rackcat_helpers import realtime_master, rt_prefix
 
     rackcat = Path(args.build_dir) / "rackcat"
     tmp = Path(tempfile.mkdtemp(prefix="rackcat-foe-bench-"))
@@ -52,7 +53,8 @@ def main():
             cap = tmp / f"foe-{mbx}.pcap" if pcap else None
             proc = SlaveProcess(ns, f"{rackcat} run --iface {{iface}} --slaves {{slaves}}", 1,
                                 ["--state-dir", state, "--no-control", "--no-pty",
-                                 "--boot-mailbox-size", str(mbx)], cap, tmp / f"log-{mbx}-{time.monotonic_ns()}.txt")
+                                 "--boot-mailbox-size", str(mbx)], cap, tmp / f"log-{mbx}-{time.monotonic_ns()}.txt",
+                                rt_prefix())
             try:
                 proc.wait_ready(1)
                 m = pysoem.Master()
@@ -114,7 +116,13 @@ def main():
                 n += 1
         return None, busy
 
-    print(f"FoE write of {len(data)} bytes (pysoem {pysoem.__version__}, BOOT)")
+    print(f"FoE write of {len(data)} bytes (pysoem {pysoem.__version__}, BOOT; slave and master "
+          "SCHED_FIFO as in tests/interop)")
+    with realtime_master():
+        measure(args, data, one, frames_of_transfer)
+
+
+def measure(args, data, one, frames_of_transfer):
     for mbx in [int(x) for x in args.sizes.split(",")]:
         rates = []
         for _ in range(args.runs):

@@ -48,6 +48,7 @@ RULES = {
     "apps": MDP + ["ecat/", "esi/", "modules/", "device/", "apps/"],
     # Tests and benchmarks of a layer see that layer and what it may see, plus their own folder.
     "tests/coe": COE + ["tests/coe/", "tests/support/"],
+    "tests/foe": BASE + ["foe/", "tests/foe/"],
     "tests/mdp": MDP + ["tests/mdp/", "tests/support/"],
     "tests/esi": MDP + ["esi/", "tests/esi/", "tests/support/"],
     "tests/device": COE + ["esi/", "ecat/application.hpp", "device/", "tests/device/"],
@@ -66,6 +67,7 @@ RULES = {
     "bench/ecat": ECAT + ["tests/ecat/", "apps/rack_slave/"],
     "bench/modules": MDP + ["modules/", "tests/modules/"],
     "fuzz/coe": COE + ["tests/coe/"],
+    "fuzz/foe": BASE + ["foe/"],
     "fuzz/mdp": MDP,
     "fuzz/esi": MDP + ["esi/"],
     "fuzz/ecat": ECAT + ["tests/ecat/"],
