@@ -131,6 +131,7 @@ int run(const RunArgs& a) {
       return ecat::kExitUsage;
     }
     std::vector<modules::Rack*> all;
+    all.reserve(racks.size());
     for (auto& r : racks) all.push_back(&r->rack());
     api = std::make_unique<modules::ControlApi>(
         all, [&runner](std::function<void()> f) { runner.loop().post(std::move(f)); }, options);

@@ -76,8 +76,9 @@ std::optional<std::vector<uint8_t>> pack_firmware(const FirmwareInfo& info,
   coe::put_le32(h + 24, info.revision);
   coe::put_le32(h + 28, static_cast<uint32_t>(payload.size()));
   coe::put_le32(h + 32, crc32_of(payload));
-  std::memcpy(h + kSoftwareVersionAt, info.software_version.data(), info.software_version.size());
-  std::memcpy(h + kShortVersionAt, info.short_version.data(), info.short_version.size());
+  // NUL-padded fields: the buffer is zero, the text goes in without a terminator of its own.
+  std::copy(info.software_version.begin(), info.software_version.end(), h + kSoftwareVersionAt);
+  std::copy(info.short_version.begin(), info.short_version.end(), h + kShortVersionAt);
   if (!sha256_of(payload, h + kShaAt)) {
     error = "SHA-256 failed";
     return std::nullopt;

@@ -122,7 +122,7 @@ FirmwareStore::Status FirmwareStore::poll_commit() const {
   return {false, result_, result_detail_};
 }
 
-void FirmwareStore::commit(Verifier verify) {
+void FirmwareStore::commit(const Verifier& verify) {
   auto finish = [this](foe::FoeError e, std::string detail) {
     if (e != foe::FoeError::None) {
       close_tmp();

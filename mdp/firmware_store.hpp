@@ -64,7 +64,7 @@ class FirmwareStore {
   void wait();
 
  private:
-  void commit(Verifier verify);
+  void commit(const Verifier& verify);
   void close_tmp();
 
   std::shared_ptr<const StateDirectory> dir_;
