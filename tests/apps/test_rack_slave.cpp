@@ -1,0 +1,137 @@
+// apps/rack_slave: RackSlave adapts one rack (mdp::Device + modules::Rack) to the ESC's
+// ecat::Application. These tests drive it through that interface alone, as the ESC does.
+#include "apps/rack_slave/rack_slave.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <unistd.h>
+
+#include "apps/rack_slave/rack_loading.hpp"
+#include "tests/mdp/sdo_client.hpp"
+
+namespace rackcat::apps {
+namespace {
+
+using ecat::AlState;
+
+class RackSlaveTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("rackcat-test-rack-slave-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  mdp::RackConfig default_rack() {
+    auto config = load_rack_or_report("");
+    EXPECT_TRUE(config.has_value());
+    return *config;
+  }
+
+  std::filesystem::path dir_;
+};
+
+// INIT -> PREOP as the ESC does it: ask, then report the change. SDO needs PREOP.
+void to_preop(RackSlave& slave) {
+  ASSERT_EQ(slave.on_state_request(AlState::Init, AlState::PreOp), 0);
+  slave.on_state_changed(AlState::Init, AlState::PreOp);
+}
+
+uint32_t sii_u32(std::span<const uint8_t> sii,
+                 size_t word) {  // little-endian u32 at a word address
+  return static_cast<uint32_t>(sii[2 * word]) | (static_cast<uint32_t>(sii[2 * word + 1]) << 8) |
+         (static_cast<uint32_t>(sii[2 * word + 2]) << 16) |
+         (static_cast<uint32_t>(sii[2 * word + 3]) << 24);
+}
+
+TEST_F(RackSlaveTest, TheSiiCarriesTheDeviceIdentityAndThePositionInTheSerial) {
+  const mdp::RackConfig config = default_rack();
+  RackSlave first(config, dir_.string(), 0);
+  RackSlave third(config, dir_.string(), 2);
+  to_preop(first);
+  to_preop(third);
+  // SII words 0x08..0x0F: vendor, product, revision, serial (ETG.2010 Table 2) = 0x1018:01..04.
+  mdp::testing::SdoClient sdo(first.device());
+  EXPECT_EQ(sii_u32(first.eeprom(), 0x08), sdo.read_u(0x1018, 1));
+  EXPECT_EQ(sii_u32(first.eeprom(), 0x0A), sdo.read_u(0x1018, 2));
+  EXPECT_EQ(sii_u32(first.eeprom(), 0x0E), config.control.serial);
+  EXPECT_EQ(sii_u32(third.eeprom(), 0x0E), config.control.serial + 2);
+  mdp::testing::SdoClient sdo3(third.device());
+  EXPECT_EQ(sdo3.read_u(0x1018, 4), config.control.serial + 2);
+}
+
+TEST_F(RackSlaveTest, EachPositionHasItsOwnStateDirectory) {
+  const mdp::RackConfig config = default_rack();
+  RackSlave first(config, dir_.string(), 0);
+  RackSlave second(config, dir_.string(), 1);
+  EXPECT_EQ(std::filesystem::path(first.device().state_dir()), dir_);
+  EXPECT_EQ(std::filesystem::path(second.device().state_dir()), dir_ / "slave-1");
+}
+
+TEST_F(RackSlaveTest, ProcessDataSizesAreTheDevicesPdoAssignment) {
+  RackSlave slave(default_rack(), dir_.string(), 0);
+  const ecat::ProcessDataSizes sizes = slave.process_data_sizes();
+  EXPECT_EQ(sizes.outputs, slave.device().output_bytes());
+  EXPECT_EQ(sizes.inputs, slave.device().input_bytes());
+  EXPECT_GT(sizes.inputs, 0);
+}
+
+TEST_F(RackSlaveTest, MailboxRequestsReachTheDevicesSdoServer) {
+  RackSlave slave(default_rack(), dir_.string(), 0);
+  to_preop(slave);
+  // Mailbox header (ETG.1000.4 §5.5: length 10, type 3 CoE, counter 1), CoE header (SDO
+  // request, ETG.1000.6 §5.6.1), SDO upload initiate 0x40 of 0x1018:02 (§5.6.2.2).
+  const std::array<uint8_t, 16> request{10,   0,    0,    0,    0, 0x13, 0x00, 0x20,
+                                        0x40, 0x18, 0x10, 0x02, 0, 0,    0,    0};
+  std::array<uint8_t, 128> reply{};
+  const size_t n = slave.on_mailbox(request, reply);
+  ASSERT_GE(n, 16u);
+  EXPECT_EQ(reply[5] & 0x0F, 0x03);                             // CoE
+  EXPECT_EQ(reply[7] >> 4, 0x3);                                // SDO response
+  EXPECT_EQ(reply[8] & 0xE0, 0x40);                             // upload initiate response
+  EXPECT_EQ(sii_u32(reply, 6), sii_u32(slave.eeprom(), 0x0A));  // bytes 12..15 = product code
+}
+
+TEST_F(RackSlaveTest, StateChangesReachTheDevice) {
+  RackSlave slave(default_rack(), dir_.string(), 0);
+  to_preop(slave);
+  EXPECT_EQ(slave.device().state(), coe::EsmState::PreOp);
+  slave.on_state_changed(AlState::PreOp, AlState::Init);
+  EXPECT_EQ(slave.device().state(), coe::EsmState::Init);
+}
+
+TEST_F(RackSlaveTest, DeviceResetRestartsTheEscOnceTheAnswerIsRead) {
+  RackSlave slave(default_rack(), dir_.string(), 0);
+  int restarts = 0;
+  slave.set_restart_handler([&] { ++restarts; });
+  to_preop(slave);
+  mdp::testing::SdoClient sdo(slave.device());
+  // 0xFBF0:01 device reset with its signature (docs/MDP.md command table).
+  const std::vector<uint8_t> reset{0x74, 0x65, 0x73, 0x65, 0x72, 0x00};
+  EXPECT_EQ(sdo.download(0xFBF0, 1, reset), 0u);
+  EXPECT_EQ(restarts, 0);
+  // The reset runs on the device's parameter thread; the ESC polls the mailbox each cycle. The
+  // restart comes on the poll after the device has reset (SM1 free: the answer was read).
+  std::array<uint8_t, 128> reply{};
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (restarts == 0 && std::chrono::steady_clock::now() < deadline) {
+    slave.poll_mailbox(reply);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(restarts, 1);
+  slave.poll_mailbox(reply);
+  EXPECT_EQ(restarts, 1);  // once per reset
+}
+
+}  // namespace
+}  // namespace rackcat::apps
