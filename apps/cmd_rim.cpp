@@ -19,6 +19,7 @@
 #include "apps/commands.hpp"
 #include "mdp/rack_config.hpp"
 #include "modules/canopen/socketcan.hpp"
+#include "modules/rack/events.hpp"
 #include "modules/rim/master.hpp"
 #include "modules/rim/node.hpp"
 #include "modules/rim/sources.hpp"
@@ -48,20 +49,6 @@ Micros now_us(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() -
                                                                t0)
       .count();
-}
-
-const char* state_name(modules::RimState s) {
-  switch (s) {
-    case modules::RimState::Offline:
-      return "OFFLINE";
-    case modules::RimState::Connected:
-      return "CONNECTED";
-    case modules::RimState::Online:
-      return "ONLINE";
-    case modules::RimState::Error:
-      return "ERROR";
-  }
-  return "?";
 }
 
 int run_rim(const RimArgs& a) {
@@ -126,7 +113,7 @@ int run_rim(const RimArgs& a) {
   RimMaster master(rack, *bus, o, rims);
   master.on_state([&](uint8_t rim, modules::RimState s, bool comm_error) {
     std::printf("%.1f rim %d %s%s%s%s\n", static_cast<double>(now_us(t0)) / 1000.0, rim,
-                state_name(s), comm_error ? " comm-error" : "",
+                modules::rim_state_name(s).data(), comm_error ? " comm-error" : "",
                 master.reason(rim).empty() ? "" : " ", master.reason(rim).c_str());
     std::fflush(stdout);
   });

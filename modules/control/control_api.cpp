@@ -38,20 +38,6 @@ const char* esm_name(coe::EsmState s) {
   return "?";
 }
 
-const char* rim_state_name(RimState s) {
-  switch (s) {
-    case RimState::Offline:
-      return "offline";
-    case RimState::Connected:
-      return "connected";
-    case RimState::Online:
-      return "online";
-    case RimState::Error:
-      return "error";
-  }
-  return "?";
-}
-
 const char* fault_name(WiringFault f) {
   switch (f) {
     case WiringFault::None:
@@ -611,17 +597,9 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     if (path == "/api/rim/unplug") {
       st = RimState::Offline;
     } else if (path == "/api/rim/state") {
-      const std::string s = text(body, "state");
-      if (s == "offline")
-        st = RimState::Offline;
-      else if (s == "connected")
-        st = RimState::Connected;
-      else if (s == "online")
-        st = RimState::Online;
-      else if (s == "error")
-        st = RimState::Error;
-      else
-        throw BadRequest("'state' must be offline, connected, online or error");
+      const std::optional<RimState> named = rim_state_from_name(text(body, "state"));
+      if (!named) throw BadRequest("'state' must be offline, connected, online or error");
+      st = *named;
     }
     const bool err = path == "/api/rim/replug" ? false : comm_error;
     return run([r, rr, st, err] {

@@ -2,12 +2,29 @@
 // CoE Emergency codes rackcat raises when the exception tree changes (docs/MODULES.md).
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
 namespace rackcat::modules {
 
 // RIM communication state, 0x2rr1:08 bits 1..0 (guide Table 16).
 enum class RimState : uint8_t { Offline = 0, Connected = 1, Online = 2, Error = 3 };
+
+// The one name table of the RIM states, indexed by the 0x2rr1:08 value: what the control API
+// answers and accepts and what `rackcat rim --watch` prints.
+inline constexpr std::array<std::string_view, 4> kRimStateNames{"offline", "connected", "online",
+                                                                "error"};
+constexpr std::string_view rim_state_name(RimState s) {
+  return kRimStateNames[static_cast<uint8_t>(s) & 0x3];
+}
+constexpr std::optional<RimState> rim_state_from_name(std::string_view name) {
+  for (size_t i = 0; i < kRimStateNames.size(); ++i) {
+    if (kRimStateNames[i] == name) return static_cast<RimState>(i);
+  }
+  return std::nullopt;
+}
 
 namespace rim_event {
 inline constexpr uint32_t kStateBits = 0x3;            // bits 1..0, active, not latched
