@@ -9,7 +9,7 @@
 
 namespace rackcat::esi {
 
-// SII SyncManager category type byte (ETG.2010 §2.6 Table 10; GUIDE.md §3).
+// SII SyncManager category type byte (ETG.2010 §2.6 Table 10).
 enum class SmType : uint8_t {
   Unused = 0,
   MailboxOut = 1,  // master -> slave (receive mailbox, SM0)

@@ -1,6 +1,6 @@
 // The esi entry points for the rack: the SII image the ESC serves and the ESI file, both from
 // the live mdp::Device (its object dictionary and the fixed SM plan of
-// mdp/sync_manager_layout.hpp). The lead feeds build_sii() to ecat::Application::eeprom().
+// mdp/sync_manager_layout.hpp). apps/rack_slave feeds build_sii() to ecat::Application::eeprom().
 #pragma once
 
 #include <string>

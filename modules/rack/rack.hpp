@@ -3,7 +3,7 @@
 // exception tree with its CoE Emergencies. The fault-injection control API
 // (modules/control/control_api.hpp) is a separate object its owner creates on a Rack.
 //
-// Use (the lead's `rackcat run`):
+// Use (as apps/rack_slave and apps/cmd_run.cpp do):
 //
 //   mdp::Device device(config);
 //   modules::Rack rack(device);                         // attaches itself as CycleListener

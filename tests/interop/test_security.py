@@ -170,7 +170,7 @@ def test_nothing_written_outside_the_state_directory(rackcat, tmp_path):
         assert not (state / "parameters.bin").is_symlink()
 
 
-# --- issue 14 item 5: the privilege drop covers every thread ---------------------------------
+# --- the privilege drop covers every thread -----------------------------------------------------
 
 def _every_task(pid):
     """/proc/PID/task/*/status of every thread of the process."""

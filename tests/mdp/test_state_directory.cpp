@@ -1,4 +1,4 @@
-// A state directory prepared by someone hostile (issue 14 item 6): a symlinked slave-N, and
+// A state directory prepared by someone hostile: a symlinked slave-N, and
 // parameters.bin as a directory, a FIFO, a symlink to /dev/zero, a 300 MiB file, or a file
 // with a valid CRC holding a value an SDO write would refuse. Each time the device starts on
 // its defaults with one line saying why, every command object answers at once (the file work

@@ -190,7 +190,7 @@ namespace rackcat::mdp {
 namespace {
 
 TEST(RackConfig, AnErrorQuotingAHugeValueIsStillOneShortLine) {
-  // Issue 14 item 8: a 50 MB string gave a 52 MB error line. 5 MB (with a line break in it)
+  // A 50 MB string gave a 52 MB error line. 5 MB (with a line break in it)
   // shows the bound as well and parses faster.
   std::string huge(5 << 20, 'x');
   huge[1000] = '\n';
