@@ -1,44 +1,11 @@
-// The request path allocates nothing after start-up: every service below runs with a global
-// operator new that counts (this file replaces it for the whole test binary).
-// GCC flags free() on memory from operator new; here both sides are ours and use malloc/free.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-
-#include <atomic>
-#include <cstdlib>
-#include <new>
+// The request path allocates nothing after start-up: every service below runs inside a
+// CountAllocations scope (tests/support/allocation_counter.hpp).
+#include <optional>
 
 #include "coe/diagnosis_history.hpp"
 #include "coe/process_image.hpp"
 #include "tests/coe/sdo_fixture.hpp"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}
-
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
+#include "tests/support/allocation_counter.hpp"
 
 namespace rackcat::coe::test {
 namespace {
@@ -78,7 +45,9 @@ TEST_F(SdoTest, RequestPathMakesNoHeapAllocation) {
   std::vector<size_t> lengths;
   lengths.reserve(requests.size() * 8);
 
-  const long before = g_allocations.load();
+  if (!rackcat::testing::CountAllocations::available())
+    GTEST_SKIP() << "operator new is ASan's here";
+  std::optional<rackcat::testing::CountAllocations> count(std::in_place);
   for (const Bytes& r : requests) {
     lengths.push_back(server.handle(r, reply, EsmState::PreOp));
     while (size_t n = server.poll(reply)) lengths.push_back(n);
@@ -86,9 +55,10 @@ TEST_F(SdoTest, RequestPathMakesNoHeapAllocation) {
     lengths.push_back(server.poll(reply));
   }
   const size_t double_write = server.handle(repeat, reply, EsmState::PreOp);  // dropped
-  const long after = g_allocations.load();
+  const size_t allocations = count->allocations();
+  count.reset();
 
-  EXPECT_EQ(after - before, 0);
+  EXPECT_EQ(allocations, 0u);
   EXPECT_EQ(double_write, 0u);
   EXPECT_EQ(hooked, 1);
   for (size_t n : lengths) EXPECT_GT(n, 0u);
@@ -98,12 +68,14 @@ TEST_F(SdoTest, CyclicPathMakesNoHeapAllocation) {
   ProcessImage image(od);
   ASSERT_EQ(image.compile(), AbortCode::None);
   Bytes sm2(image.output_bytes(), 0x5A), sm3(image.input_bytes());
-  const long before = g_allocations.load();
+  if (!rackcat::testing::CountAllocations::available())
+    GTEST_SKIP() << "operator new is ASan's here";
+  rackcat::testing::CountAllocations count;
   for (int i = 0; i < 1000; ++i) {
     image.write_outputs(sm2);
     image.read_inputs(sm3);
   }
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(count.allocations(), 0u);
   EXPECT_EQ(od.find(0x7000)->get_u(2), 0x5Au);
 }
 
@@ -119,7 +91,9 @@ TEST(DiagnosisHistoryAllocation, AddAndAcknowledgeMakeNoHeapAllocation) {
   m.type = diag::Type::Warning;
   m.add_u8(1);
   m.add_u16(2);
-  const long before = g_allocations.load();
+  if (!rackcat::testing::CountAllocations::available())
+    GTEST_SKIP() << "operator new is ASan's here";
+  rackcat::testing::CountAllocations count;
   for (int i = 0; i < 1000; ++i) {
     m.time_ns = static_cast<uint64_t>(i);
     history.add(m);
@@ -128,7 +102,7 @@ TEST(DiagnosisHistoryAllocation, AddAndAcknowledgeMakeNoHeapAllocation) {
     if (i == 500) history.write_flags(diag::kFlagAcknowledgeMode);
     if (i % 100 == 99) history.write_newest_acknowledged(0);
   }
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(count.allocations(), 0u);
   EXPECT_GT(history.count(), 0u);
 }
 

@@ -1,45 +1,12 @@
-// The cyclic path allocates nothing: global operator new is replaced by a counting version
-// (counting only on the thread that asks for it) around 1000 cyclic LRW + FRMW frames to a
+// The cyclic path allocates nothing: allocations of this thread are counted
+// (tests/support/allocation_counter.hpp) around 1000 cyclic LRW + FRMW frames to a
 // 16-slave segment in OP with DC SYNC0 running, and around mailbox-free register traffic.
 #include <gtest/gtest.h>
 
-#include <cstdlib>
-#include <new>
+#include <optional>
 
 #include "tests/ecat/test_master.hpp"
-
-namespace {
-thread_local bool g_counting = false;
-thread_local size_t g_allocations = 0;
-}  // namespace
-
-void* operator new(size_t size) {
-  if (g_counting) ++g_allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](size_t size) {
-  return operator new(size);
-}
-void* operator new(size_t size, const std::nothrow_t&) noexcept {
-  if (g_counting) ++g_allocations;
-  return std::malloc(size == 0 ? 1 : size);
-}
-void* operator new[](size_t size, const std::nothrow_t& t) noexcept {
-  return operator new(size, t);
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, size_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, size_t) noexcept {
-  std::free(p);
-}
+#include "tests/support/allocation_counter.hpp"
 
 namespace rackcat::ecat::test {
 namespace {
@@ -63,8 +30,8 @@ TEST(NoAllocation, CyclicFramesAllocateNothing) {
   // The test device records SYNC events in a vector: give it room so only the ESC is measured.
   for (size_t k = 0; k < 16; ++k) line.app(k).syncs.reserve(2000);
 
-  g_allocations = 0;
-  g_counting = true;
+  if (!rackcat::testing::CountAllocations::available()) GTEST_SKIP() << "operator new is ASan's";
+  std::optional<rackcat::testing::CountAllocations> count(std::in_place);
   size_t wkc_ok = 0;
   for (int i = 0; i < 1000; ++i) {
     std::copy(frame.begin(), frame.end(), work.begin());
@@ -73,8 +40,9 @@ TEST(NoAllocation, CyclicFramesAllocateNothing) {
     line.segment->service();
     if (work[16 + 10 + 16 * 10] == 48) ++wkc_ok;
   }
-  g_counting = false;
-  EXPECT_EQ(g_allocations, 0u);
+  const size_t allocations = count->allocations();
+  count.reset();
+  EXPECT_EQ(allocations, 0u);
   EXPECT_EQ(wkc_ok, 1000u);
   EXPECT_GE(line.app(0).syncs.size(), 249u);
 }
@@ -82,11 +50,10 @@ TEST(NoAllocation, CyclicFramesAllocateNothing) {
 TEST(NoAllocation, MalformedFramesAllocateNothing) {
   Line line(4);
   auto bad = hex("ff ff ff ff ff ff 00 00 00 00 00 01 88 a4 70 10 02 01 00 00 80 0f 64 00 00 00");
-  g_allocations = 0;
-  g_counting = true;
+  if (!rackcat::testing::CountAllocations::available()) GTEST_SKIP() << "operator new is ASan's";
+  rackcat::testing::CountAllocations count;
   for (int i = 0; i < 100; ++i) line.segment->process(bad);
-  g_counting = false;
-  EXPECT_EQ(g_allocations, 0u);
+  EXPECT_EQ(count.allocations(), 0u);
 }
 
 }  // namespace

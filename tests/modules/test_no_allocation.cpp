@@ -1,65 +1,19 @@
 // The cyclic path allocates nothing: every driver, every kind of signal source and the
-// exception-tree evaluation run for many cycles with a counting global operator new.
-#include <atomic>
-#include <cstdlib>
+// exception-tree evaluation run for many cycles inside a CountAllocations scope
+// (tests/support/allocation_counter.hpp).
 #include <fstream>
-#include <new>
+#include <optional>
 
 #include "modules/cards/analog_scale.hpp"
-#include "rack_fixture.hpp"
-
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<size_t> g_allocations{0};
-}  // namespace
-
-// AddressSanitizer owns operator new (all its variants, nothrow included); the sanitizer build
-// checks memory errors, the regular build checks allocations. GCC says __SANITIZE_ADDRESS__,
-// clang __has_feature(address_sanitizer).
-#if defined(__SANITIZE_ADDRESS__)
-#define RACKCAT_UNDER_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define RACKCAT_UNDER_ASAN 1
-#endif
-#endif
-
-#if defined(RACKCAT_UNDER_ASAN)
-#define RACKCAT_COUNT_ALLOCATIONS 0
-#else
-#define RACKCAT_COUNT_ALLOCATIONS 1
-// GCC cannot see that these replacements pair malloc with free.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t n) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  return operator new(n);
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
-#pragma GCC diagnostic pop
-#endif
+#include "tests/modules/rack_fixture.hpp"
+#include "tests/support/allocation_counter.hpp"
 
 using namespace rackcat;
 using namespace rackcat::modules;
 using namespace rackcat::modules::testing;
 
 TEST_F(RackTest, CyclicPathAllocatesNothing) {
-  if (!RACKCAT_COUNT_ALLOCATIONS) GTEST_SKIP() << "operator new belongs to the sanitizer here";
+  if (!rackcat::testing::CountAllocations::available()) GTEST_SKIP() << "operator new is ASan's";
   const std::string csv = ::testing::TempDir() + "noalloc.csv";
   std::ofstream(csv) << "0,0\n0.01,5\n0.02,-5\n";
   const uint16_t ain = at(1, 12).module().number;
@@ -78,8 +32,7 @@ TEST_F(RackTest, CyclicPathAllocatesNothing) {
   for (int k = 0; k < 10; ++k) cycle();  // warm-up
   drain_emergencies();
 
-  g_allocations = 0;
-  g_counting = true;
+  std::optional<rackcat::testing::CountAllocations> count(std::in_place);
   for (int k = 0; k < 5000; ++k) {
     // Outputs change every cycle, so safe/unsafe wiring faults come and go, the exception
     // tree is re-evaluated and emergencies are queued.
@@ -89,7 +42,8 @@ TEST_F(RackTest, CyclicPathAllocatesNothing) {
     rack.on_outputs(device);
     rack.before_inputs(device);
   }
-  g_counting = false;
-  EXPECT_EQ(g_allocations.load(), 0u);
+  const size_t allocations = count->allocations();
+  count.reset();
+  EXPECT_EQ(allocations, 0u);
   EXPECT_NE(module_obj(at(1, 12), 0x6000, 0x2).get_u(1), 0u);
 }
