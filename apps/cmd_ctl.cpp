@@ -49,6 +49,8 @@ struct CtlOptions {
   std::string hex;
   std::string error;
   std::string cts;
+  std::string overload;
+  std::string overtemperature;
 };
 
 // The first line of a small file below the state directory (no symlink followed), or "".
@@ -171,6 +173,25 @@ void print_rack(const json& r) {
   for (const auto& m : r["modules"]) print_module(m);
 }
 
+// `rackcat ctl diag`: the 0x10F3 history as text, oldest first (ETG.1020 ch. 13).
+void print_diagnosis(const json& d) {
+  std::printf(
+      "0x10F3: %zu of %d messages, newest %d, newest acknowledged %d, %s mode, flags %s%s\n",
+      d["messages"].size(), d["maximum_messages"].get<int>(), d["newest_message"].get<int>(),
+      d["newest_acknowledged"].get<int>(), d["mode"].get<std::string>().c_str(),
+      d["flags"].get<std::string>().c_str(),
+      d["new_messages_available"].get<bool>() ? ", new messages" : "");
+  for (const auto& m : d["messages"]) {
+    const uint64_t ns = m["time_ns"].get<uint64_t>();
+    std::printf("  %3d %c %-7s %s %s %10llu.%06llu s %s  %s\n", m["subindex"].get<int>(),
+                m["acknowledged"].get<bool>() ? '+' : ' ', m["type"].get<std::string>().c_str(),
+                m["text_id"].get<std::string>().c_str(), m["diag_code"].get<std::string>().c_str(),
+                static_cast<unsigned long long>(ns / 1000000000ull),
+                static_cast<unsigned long long>((ns / 1000ull) % 1000000ull),
+                m["time_base"].get<std::string>().c_str(), m["text"].get<std::string>().c_str());
+  }
+}
+
 void add_ctl(CLI::App& app) {
   auto o = std::make_shared<CtlOptions>();
   CLI::App* ctl = app.add_subcommand(
@@ -272,6 +293,31 @@ void add_ctl(CLI::App& app) {
   cpu->add_flag("--now", o->now, "publish now instead of at the next 30 s update");
   cpu->callback([o] {
     request(*o, "POST", "/api/cpu_temperature", {{"celsius", o->celsius}, {"immediate", o->now}});
+  });
+
+  CLI::App* dg = ctl->add_subcommand(
+      "diag", "the diagnosis history 0x10F3 as text (ETG.1020; + = acknowledged)");
+  dg->add_flag("--json", o->json_output, "print the JSON answer");
+  dg->callback([o] { request(*o, "GET", "/api/diagnosis", {}, print_diagnosis); });
+
+  CLI::App* of = ctl->add_subcommand("output-fault", "overload / overtemperature of an output");
+  of->add_option("--module", o->module, "module number")->required();
+  of->add_option("--channel", o->channel, "output channel (0-based)")->required();
+  of->add_option("--overload", o->overload, "true or false");
+  of->add_option("--overtemperature", o->overtemperature, "true or false");
+  of->callback([o] {
+    json body{{"module", o->module}, {"channel", o->channel}};
+    for (const auto& [key, v] :
+         {std::pair<const char*, const std::string*>{"overload", &o->overload},
+          {"overtemperature", &o->overtemperature}}) {
+      if (v->empty()) continue;
+      if (*v != "true" && *v != "false") {
+        std::fprintf(stderr, "rackcat ctl output-fault: --%s must be true or false\n", key);
+        exit_with(2);
+      }
+      body[key] = *v == "true";
+    }
+    request(*o, "POST", "/api/output_fault", body, print_diagnosis);
   });
 
   CLI::App* wf = ctl->add_subcommand("wiring-fault", "force a wiring fault on a sourcing output");

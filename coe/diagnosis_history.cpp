@@ -19,6 +19,79 @@ bool Message::add(uint16_t type, uint32_t value, uint8_t size) {
   return true;
 }
 
+namespace {
+// ETG.1000.6 data type index -> size of the parameter value (the integer types a message uses).
+size_t parameter_size(uint16_t flag) {
+  switch (flag) {
+    case 0x0001:  // BOOLEAN
+    case 0x0002:  // INTEGER8
+    case 0x0005:  // UNSIGNED8
+      return 1;
+    case 0x0003:  // INTEGER16
+    case 0x0006:  // UNSIGNED16
+      return 2;
+    case 0x0004:  // INTEGER32
+    case 0x0007:  // UNSIGNED32
+    case 0x0008:  // REAL32
+      return 4;
+    default:
+      // Bits 12..15 = 1/2/3 (byte array, ASCII, Unicode): bits 0..11 are the length.
+      return (flag >> 12) >= 1 && (flag >> 12) <= 3 ? (flag & 0x0FFF) : 0;
+  }
+}
+}  // namespace
+
+uint32_t Message::parameter(size_t n) const {
+  size_t pos = 0;
+  for (size_t i = 0; i < parameter_count && pos + 2 <= parameter_bytes; ++i) {
+    const auto flag = static_cast<uint16_t>(parameters[pos] | (parameters[pos + 1] << 8));
+    const size_t size = parameter_size(flag);
+    if (size == 0 || pos + 2 + size > parameter_bytes) return 0;
+    if (i == n) {
+      if (size > 4) return 0;
+      uint32_t v = 0;
+      for (size_t b = 0; b < size; ++b)
+        v |= static_cast<uint32_t>(parameters[pos + 2 + b]) << (8 * b);
+      return v;
+    }
+    pos += 2 + size;
+  }
+  return 0;
+}
+
+std::optional<Message> decode(std::span<const uint8_t> slot) {
+  if (slot.size() < 16 || std::all_of(slot.begin(), slot.end(), [](uint8_t b) { return b == 0; }))
+    return std::nullopt;
+  auto get = [&](size_t at, size_t n) {
+    uint64_t v = 0;
+    for (size_t i = 0; i < n; ++i) v |= static_cast<uint64_t>(slot[at + i]) << (8 * i);
+    return v;
+  };
+  Message m;
+  m.diag_code = static_cast<uint32_t>(get(0, 4));
+  const auto flags = static_cast<uint16_t>(get(4, 2));
+  m.type = static_cast<Type>(flags & 0x0F);
+  m.local_time = (flags & kMessageLocalTime) != 0;
+  m.text_id = static_cast<uint16_t>(get(6, 2));
+  m.time_ns = get(8, 8);
+  // Copy whole parameters while they fit.
+  const size_t avail = std::min(slot.size() - 16, kMaxParameterBytes);
+  size_t pos = 0;
+  uint8_t count = 0;
+  for (unsigned i = 0; i < (flags >> 8); ++i) {
+    if (pos + 2 > avail) break;
+    const auto flag = static_cast<uint16_t>(slot[16 + pos] | (slot[17 + pos] << 8));
+    const size_t size = parameter_size(flag);
+    if (size == 0 || pos + 2 + size > avail) break;
+    pos += 2 + size;
+    ++count;
+  }
+  std::copy_n(slot.begin() + 16, pos, m.parameters.begin());
+  m.parameter_bytes = static_cast<uint8_t>(pos);
+  m.parameter_count = count;
+  return m;
+}
+
 std::array<uint8_t, kMessageBytes> encode(const Message& m) {
   std::array<uint8_t, kMessageBytes> out{};
   auto put = [&out](size_t at, uint64_t v, size_t n) {

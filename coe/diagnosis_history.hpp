@@ -42,6 +42,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
+#include <span>
 
 #include "coe/object_dictionary.hpp"
 
@@ -86,6 +88,9 @@ struct Message {
   bool add_u16(uint16_t v) { return add(0x0006, v, 2); }
   bool add_u32(uint32_t v) { return add(0x0007, v, 4); }
   bool add_i16(int16_t v) { return add(0x0003, static_cast<uint16_t>(v), 2); }
+  // The value of parameter `n` (0-based) as unsigned, sign bits as stored; 0 if absent or
+  // not an integer of 1..4 bytes.
+  uint32_t parameter(size_t n) const;
 
  private:
   bool add(uint16_t type, uint32_t value, uint8_t size);
@@ -93,6 +98,9 @@ struct Message {
 
 // The message's bytes as they appear in its subindex.
 std::array<uint8_t, kMessageBytes> encode(const Message& m);
+// The inverse for a slot of at least 16 bytes (parameters that do not fit the slot are
+// dropped); nullopt for an empty (all 0) slot or a shorter one.
+std::optional<Message> decode(std::span<const uint8_t> slot);
 
 enum class AddResult : uint8_t { Stored, Filtered, Discarded };
 

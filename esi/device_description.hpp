@@ -70,6 +70,7 @@ struct CoeDetails {
   bool upload_at_startup = false;
   bool complete_access = true;
   bool segmented_sdo = true;  // ESI only: the SII has no bit for it
+  bool diag_history = true;   // ESI only: 0x10F3 diagnosis history (ETG.1020 ch. 13)
 };
 
 // Words 0..6 of the SII: the ESC configuration area loaded into registers at power-on

@@ -9,6 +9,8 @@
 
 #include "coe/access.hpp"
 #include "coe/data_type.hpp"
+#include "coe/diagnosis_history.hpp"
+#include "mdp/diagnosis_catalogue.hpp"
 
 namespace rackcat::esi {
 namespace {
@@ -259,12 +261,32 @@ class DictionaryWriter {
   std::set<std::string> declared_;
 };
 
-void write_profile(pugi::xml_node parent, const char* element, const coe::ObjectDictionary& od,
-                   bool depend_on_slot) {
+pugi::xml_node write_profile(pugi::xml_node parent, const char* element,
+                             const coe::ObjectDictionary& od, bool depend_on_slot) {
   auto profile = parent.append_child(element);
   // ETG.5001: a modular device announces profile 5001.
   profile.append_child("ProfileNo").text().set(5001);
   DictionaryWriter(profile.append_child("Dictionary"), od, depend_on_slot).write_all();
+  return profile;
+}
+
+// The texts of the 0x10F3 messages (ETG.2000 DiagnosticsType, ETG.1020 ch. 13): one
+// DiagMessage per text ID with its class; %1..%4 stand for the message's parameters by
+// position (RIM, module, channel, detail; mdp/diagnosis_catalogue.hpp).
+void write_diag_messages(pugi::xml_node profile) {
+  auto messages = profile.append_child("DiagMessages");
+  for (const mdp::diag::DiagText& t : mdp::diag::catalogue()) {
+    auto m = messages.append_child("DiagMessage");
+    text_child(m, "TextId", esi_hex(t.text_id, 4));
+    auto text = m.append_child("MessageText");
+    text.text().set(std::string(t.text).c_str());
+    text.append_attribute("LcId").set_value(1033);
+    const auto type = mdp::diag::type_of(t.text_id);
+    text_child(m.append_child("Flags"), "DiagClass",
+               type == coe::diag::Type::Error     ? "error"
+               : type == coe::diag::Type::Warning ? "warning"
+                                                  : "information");
+  }
 }
 
 void write_pdo(pugi::xml_node parent, const char* element, const PdoDescription& p,
@@ -416,7 +438,10 @@ std::string write_esi(const EsiContent& c) {
   type.append_attribute("RevisionNo").set_value(esi_hex(d.revision, 8).c_str());
   text_child(device, "Name", d.device_name);
   text_child(device, "GroupType", d.group_type);
-  write_profile(device, "Profile", *c.dictionary, false);
+  auto device_profile = write_profile(device, "Profile", *c.dictionary, false);
+  if (d.coe.diag_history && c.dictionary->find(coe::diag::kIndex)) {
+    write_diag_messages(device_profile);
+  }
 
   for (auto f : d.fmmus) text_child(device, "Fmmu", fmmu_text(f));
   for (const auto& sm : d.sms) {
@@ -440,6 +465,9 @@ std::string write_esi(const EsiContent& c) {
   coe_node.append_attribute("PdoUpload").set_value(d.coe.upload_at_startup);
   coe_node.append_attribute("CompleteAccess").set_value(d.coe.complete_access);
   coe_node.append_attribute("SegmentedSdo").set_value(d.coe.segmented_sdo);
+  if (d.coe.diag_history && c.dictionary->find(coe::diag::kIndex)) {
+    coe_node.append_attribute("DiagHistory").set_value(true);
+  }
   if (d.foe) mailbox.append_child("FoE");
 
   if (!d.dc_modes.empty()) {

@@ -43,6 +43,8 @@ struct OutputChannel {
   double wire = 0.0;       // the level on the terminal: driven, unless a wiring fault
   uint32_t code = 0;       // process-data code of `driven`
   WiringFault fault = WiringFault::None;
+  bool overload = false;         // output overload (fault injection, channel diagnosis only)
+  bool overtemperature = false;  // output driver overtemperature (likewise)
 };
 
 class CardDriver {

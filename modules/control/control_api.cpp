@@ -9,6 +9,7 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "mdp/diagnosis_catalogue.hpp"
 #include "mdp/file_root.hpp"
 #include "modules/cards/uart_driver.hpp"
 #include "modules/signals/source_factory.hpp"
@@ -152,6 +153,45 @@ json module_json(Rack& rack, const CardDriver& d) {
   }
   (void)rack;
   return j;
+}
+
+// The 0x10F3 diagnosis history (ETG.1020 ch. 13), oldest message first, with its text.
+json diagnosis_json(Rack& rack) {
+  const coe::diag::History& h = rack.device().diagnosis();
+  json messages = json::array();
+  for (size_t age = 0; age < h.count(); ++age) {
+    const uint8_t sub = h.subindex_of(age);
+    const auto m = coe::diag::decode(h.slot(sub));
+    if (!m) continue;
+    const auto rim = static_cast<uint8_t>(m->parameter(0));
+    const auto module = static_cast<uint16_t>(m->parameter(1));
+    const auto channel = static_cast<uint8_t>(m->parameter(2));
+    const auto detail = static_cast<uint16_t>(m->parameter(3));
+    const mdp::diag::DiagText* t = mdp::diag::find(m->text_id);
+    json j{{"subindex", sub},
+           {"diag_code", fmt::format("0x{:08X}", m->diag_code)},
+           {"type", m->type == coe::diag::Type::Error     ? "error"
+                    : m->type == coe::diag::Type::Warning ? "warning"
+                                                          : "info"},
+           {"text_id", fmt::format("0x{:04X}", m->text_id)},
+           {"time_ns", m->time_ns},
+           {"time_base", m->local_time ? "local" : "dc"},
+           {"rim", rim},
+           {"module", module},
+           {"channel", channel == 0xFF ? json(nullptr) : json(channel)},
+           {"detail", detail},
+           {"acknowledged", age < h.acknowledged()},
+           {"text", t ? mdp::diag::format(*t, rim, module, channel, detail)
+                      : fmt::format("text 0x{:04X}", m->text_id)}};
+    messages.push_back(std::move(j));
+  }
+  return {{"maximum_messages", h.capacity()},
+          {"newest_message", h.newest_subindex()},
+          {"newest_acknowledged", h.acknowledged() ? h.subindex_of(h.acknowledged() - 1) : 0},
+          {"new_messages_available", h.new_messages()},
+          {"flags", fmt::format("0x{:04X}", h.flags())},
+          {"mode", h.acknowledge_mode() ? "acknowledge" : "overwrite"},
+          {"messages", std::move(messages)}};
 }
 
 json exceptions_json(Rack& rack) {
@@ -656,6 +696,32 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
       return Response{200,
                       {{"cpu_temperature", r->cpu_temperature()},
                        {"published", r->cpu_temperature_published()}}};
+    });
+  }
+  if (path == "/api/diagnosis") {
+    if (!get) return wrong_method();
+    return run([r] {
+      r->refresh();
+      return Response{200, diagnosis_json(*r)};
+    });
+  }
+  if (path == "/api/output_fault") {
+    if (!post) return wrong_method();
+    const auto module = static_cast<uint16_t>(integer(body, "module", 1, 255));
+    const auto channel = static_cast<size_t>(integer(body, "channel", 0, 31));
+    if (!body.contains("overload") && !body.contains("overtemperature"))
+      throw BadRequest("give 'overload' and/or 'overtemperature'");
+    std::optional<bool> overload, overtemp;
+    if (body.contains("overload")) overload = boolean(body, "overload", false);
+    if (body.contains("overtemperature")) overtemp = boolean(body, "overtemperature", false);
+    return run([r, module, channel, overload, overtemp] {
+      CardDriver* d = r->driver(module);
+      const bool known = d != nullptr && channel < d->outputs().size();
+      r->set_output_fault(module, channel,
+                          overload.value_or(known && d->outputs()[channel].overload),
+                          overtemp.value_or(known && d->outputs()[channel].overtemperature));
+      r->refresh();
+      return Response{200, diagnosis_json(*r)};
     });
   }
   if (path == "/api/wiring_fault") {

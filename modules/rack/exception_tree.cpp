@@ -230,15 +230,20 @@ void ExceptionTree::announce() {
     const uint32_t wrise = m.warn.active & ~m.warn.reported;
     const uint32_t erise = m.err.active & ~m.err.reported;
     const uint32_t fall = (m.warn.reported & ~m.warn.active) | (m.err.reported & ~m.err.active);
-    if (wrise) {
-      send(emcy::kSafeWiring, emcy::kRegGeneric | emcy::kRegCurrent | emcy::kRegManufacturer, 0,
-           mod, 0xFF, static_cast<uint16_t>(wrise));
+    // One Emergency (and 0x10F3 message) per channel, so each names its channel.
+    for (unsigned ch = 0; ch < 16; ++ch) {
+      const uint32_t b = 1u << ch;
+      const auto mask = static_cast<uint16_t>(b);
+      if (wrise & b) {
+        send(emcy::kSafeWiring, emcy::kRegGeneric | emcy::kRegCurrent | emcy::kRegManufacturer, 0,
+             mod, 0xFF, mask);
+      }
+      if (erise & b) {
+        send(emcy::kUnsafeWiring, emcy::kRegGeneric | emcy::kRegCurrent | emcy::kRegManufacturer, 0,
+             mod, 0xFF, mask);
+      }
+      if (fall & b) send(emcy::kNoError, remaining, 0, mod, 0xFF, mask);
     }
-    if (erise) {
-      send(emcy::kUnsafeWiring, emcy::kRegGeneric | emcy::kRegCurrent | emcy::kRegManufacturer, 0,
-           mod, 0xFF, static_cast<uint16_t>(erise));
-    }
-    if (fall) send(emcy::kNoError, remaining, 0, mod, 0xFF, static_cast<uint16_t>(fall));
     m.warn.reported = m.warn.active;
     m.err.reported = m.err.active;
   }

@@ -80,6 +80,7 @@ Rack::Rack(mdp::Device& device, RackOptions options)
     rims_[m.rim].modules.push_back(m.number);
     if (auto* u = dynamic_cast<UartDriver*>(drivers_[m.number - 1].get())) uarts_.push_back(u);
   }
+  channel_diag_ = std::make_unique<ChannelDiagnostics>(device_, drivers_);
 
   // A replay file is read below the rack file's own directory (mdp::FileRoot: no "..", no
   // absolute path, no symlink out of it), with the rights of the (unprivileged) process.
@@ -217,6 +218,7 @@ void Rack::before_inputs(mdp::Device&) {
     if (rim_online(module_rim_[i])) drivers_[i]->write_inputs(t - t0_, dt);
   }
   evaluate_faults();
+  channel_diag_->evaluate([this](size_t i) { return rim_online(module_rim_[i]); });
   if (t >= cpu_next_publish_) publish_cpu_temperature();
   if (dirty_) {
     tree_.update();
@@ -273,6 +275,7 @@ void Rack::on_watchdog_expired(mdp::Device&) {
 
 void Rack::on_exception_reset(mdp::Device&) {
   tree_.reset_latched();
+  channel_diag_->reset();  // the history is empty again: active channel causes re-appear
   dirty_ = false;
 }
 
@@ -491,6 +494,16 @@ void Rack::set_sensor_open(uint16_t module, size_t channel, bool open) {
   d->inputs()[channel].open = open;
 }
 
+void Rack::set_output_fault(uint16_t module, size_t channel, bool overload, bool overtemperature) {
+  CardDriver* d = driver(module);
+  if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
+  if (channel >= d->outputs().size())
+    throw std::invalid_argument(
+        fmt::format("module {} has {} output channels", module, d->outputs().size()));
+  d->outputs()[channel].overload = overload;
+  d->outputs()[channel].overtemperature = overtemperature;
+}
+
 void Rack::set_loop_ohms(uint16_t module, size_t channel, double ohms) {
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
@@ -602,6 +615,7 @@ void Rack::refresh() {
   }
   publish_fans();
   evaluate_faults();
+  channel_diag_->evaluate([this](size_t i) { return rim_online(module_rim_[i]); });
   tree_.update();
   dirty_ = false;
 }

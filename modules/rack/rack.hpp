@@ -30,6 +30,7 @@
 #include "coe/access.hpp"
 #include "mdp/device.hpp"
 #include "modules/cards/card_driver.hpp"
+#include "modules/rack/channel_diagnostics.hpp"
 #include "modules/rack/events.hpp"
 #include "modules/rack/exception_tree.hpp"
 #include "modules/signals/source_factory.hpp"
@@ -128,6 +129,9 @@ class Rack : public mdp::CycleListener {
   void set_wiring_fault(uint16_t module, size_t channel, WiringFault fault);
   void set_sensor_open(uint16_t module, size_t channel, bool open);
   void set_loop_ohms(uint16_t module, size_t channel, double ohms);
+  // Output overload / overtemperature of an output channel (channel diagnosis, 0x10F3).
+  // Throws std::invalid_argument for a module or channel without outputs.
+  void set_output_fault(uint16_t module, size_t channel, bool overload, bool overtemperature);
   bool detect_modules_override() const;
   // Modules with process data in the current 0x1C12/0x1C13 assignment.
   bool rim_has_mapped_process_data(uint8_t rim) const;
@@ -153,6 +157,7 @@ class Rack : public mdp::CycleListener {
   std::map<uint8_t, RimStatus> rims_;
   std::map<std::string, std::unique_ptr<StateSpacePlant>> plants_;
   ExceptionTree tree_;
+  std::unique_ptr<ChannelDiagnostics> channel_diag_;  // after drivers_ exist
   StateRequestFn state_request_;
 
   coe::EsmState state_ = coe::EsmState::Init;

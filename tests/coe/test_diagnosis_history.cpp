@@ -270,3 +270,31 @@ TEST_F(HistorySdoTest, ReadingTheNewestBySdoClearsNewMessages) {
 
 }  // namespace
 }  // namespace rackcat::coe::test
+
+namespace rackcat::coe::test {
+namespace {
+
+TEST(DiagnosisMessage, DecodeIsTheInverseOfEncode) {
+  Message m;
+  m.diag_code = diag::emergency_diag_code(0x2320);
+  m.type = Type::Warning;
+  m.text_id = 0x4601;
+  m.time_ns = 123456789;
+  m.add_u8(2);
+  m.add_u16(17);
+  m.add_u8(5);
+  m.add_u16(0);
+  const auto bytes = diag::encode(m);
+  const auto back = diag::decode(bytes);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(diag::encode(*back), bytes);
+  EXPECT_EQ(back->parameter(0), 2u);
+  EXPECT_EQ(back->parameter(1), 17u);
+  EXPECT_EQ(back->parameter(2), 5u);
+  EXPECT_EQ(back->parameter(4), 0u);
+  const std::array<uint8_t, 32> empty{};
+  EXPECT_FALSE(diag::decode(empty).has_value());
+}
+
+}  // namespace
+}  // namespace rackcat::coe::test

@@ -14,6 +14,7 @@
 #include "esi/sii_parser.hpp"
 #include "mdp/card_catalogue.hpp"
 #include "mdp/device.hpp"
+#include "mdp/diagnosis_catalogue.hpp"
 #include "mdp/rack_config.hpp"
 #include "mdp/sync_manager_layout.hpp"
 #include "tests/esi/esi_checks.hpp"
@@ -52,6 +53,30 @@ TEST_P(RackEsi, DictionaryPdosAndSmsMatchTheLiveDevice) {
   auto dev = doc.select_node("/EtherCATInfo/Descriptions/Devices/Device").node();
   testing::expect_dictionary_matches(dev, device->dictionary());
   testing::expect_pdos_and_sms_match(dev, describe_device(*device));
+}
+
+// ETG.1020 ch. 13 / ETG.2000 DiagnosticsType: the device Profile carries a DiagMessage for every
+// text ID the device can put into 0x10F3, and Mailbox/CoE announces the history.
+TEST_P(RackEsi, DiagMessagesCarryEveryTextOfTheHistory) {
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_string(write_esi(*device).c_str()));
+  auto dev = doc.select_node("/EtherCATInfo/Descriptions/Devices/Device").node();
+  EXPECT_STREQ(dev.child("Mailbox").child("CoE").attribute("DiagHistory").value(), "true");
+  std::map<std::string, std::pair<std::string, std::string>> esi;
+  for (auto m : dev.child("Profile").child("DiagMessages").children("DiagMessage")) {
+    esi[m.child_value("TextId")] = {m.child_value("MessageText"),
+                                    m.child("Flags").child_value("DiagClass")};
+  }
+  ASSERT_EQ(esi.size(), mdp::diag::catalogue().size());
+  for (const auto& t : mdp::diag::catalogue()) {
+    const auto it = esi.find(fmt::format("#x{:04X}", t.text_id));
+    ASSERT_NE(it, esi.end()) << std::hex << t.text_id;
+    EXPECT_EQ(it->second.first, t.text);
+    const char* cls = (t.text_id >> 12) == 0x8   ? "error"
+                      : (t.text_id >> 12) == 0x4 ? "warning"
+                                                 : "information";
+    EXPECT_EQ(it->second.second, cls) << std::hex << t.text_id;
+  }
 }
 
 TEST_P(RackEsi, SiiIdentityEqualsIdentityObjectAndEsiType) {

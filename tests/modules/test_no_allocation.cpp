@@ -37,6 +37,11 @@ TEST_F(RackTest, CyclicPathAllocatesNothing) {
     // Outputs change every cycle, so safe/unsafe wiring faults come and go, the exception
     // tree is re-evaluated and emergencies are queued.
     dout.set_u(1, static_cast<uint64_t>(k & 0xFFFF));
+    // Channel diagnosis (0x10F3 messages and their Emergencies) appears and disappears.
+    if (k % 100 == 0) {
+      rack.set_sensor_open(tc, 1, (k / 100) % 2 == 0);
+      rack.set_output_fault(at(1, 11).module().number, 3, (k / 100) % 3 == 0, false);
+    }
     aout.set_u(1, AnalogScale{}.to_code((k % 200) / 20.0 - 5.0));
     clock += 0.001;
     rack.on_outputs(device);
