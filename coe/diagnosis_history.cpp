@@ -281,8 +281,10 @@ AbortCode History::write_flags(uint16_t value) {
 }
 
 void History::on_read(int subindex) {
-  if (!acknowledge_mode() && count_ &&
-      (subindex == -1 || subindex == static_cast<int>(newest_subindex()))) {
+  // Only an SDO read of the newest message's own subindex counts: the process image calls
+  // the hook with -1 every cycle to pack a mapped 0x10F3:04, and a complete access reads
+  // the control entries along with the messages.
+  if (!acknowledge_mode() && count_ && subindex == static_cast<int>(newest_subindex())) {
     unread_ = false;
     publish();
   }

@@ -28,7 +28,7 @@
 //     message that was not acknowledged sets Flags bit 5 and 0x10F3:03 becomes 0. Writing 0
 //     to 0x10F3:03 deletes every message; writing the subindex of a stored message
 //     acknowledges it and every older one. New Messages Available = the newest message has
-//     not been read yet (an SDO read of its subindex, or of the whole object, clears it).
+//     not been read yet (an SDO read of its own subindex clears it, or acknowledging it).
 //   acknowledge mode: a new message replaces only acknowledged messages; with a ring full of
 //     unacknowledged ones it is discarded and Flags bit 5 set. Writing 0 to 0x10F3:03 deletes
 //     the acknowledged messages. New Messages Available = an unacknowledged message exists.
@@ -140,8 +140,9 @@ class History {
   // accepted and executed.
   AbortCode write_newest_acknowledged(uint8_t subindex);
   AbortCode write_flags(uint16_t value);
-  // An SDO read of `subindex` (-1 = complete access): clears New Messages Available in
-  // overwrite mode when the newest message is read.
+  // An SDO read of `subindex` (-1 = complete access or the process image packing a mapped
+  // 0x10F3:04): clears New Messages Available in overwrite mode when it is the newest
+  // message's subindex.
   void on_read(int subindex);
 
  private:

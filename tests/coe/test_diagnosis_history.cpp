@@ -140,7 +140,9 @@ TEST_F(HistoryTest, OverwriteModeNewMessagesClearedByReadingTheNewest) {
   EXPECT_EQ(obj->get_u(4), 0u);
   h.add(msg(3));
   EXPECT_EQ(obj->get_u(4), 1u);
-  h.on_read(-1);  // complete access reads the newest too
+  h.on_read(-1);  // complete access / PDO packing: not a read of the newest message
+  EXPECT_EQ(obj->get_u(4), 1u);
+  h.on_read(8);
   EXPECT_EQ(obj->get_u(4), 0u);
 }
 

@@ -98,6 +98,7 @@ TEST(DiagnosisHistoryAllocation, AddAndAcknowledgeMakeNoHeapAllocation) {
     m.time_ns = static_cast<uint64_t>(i);
     history.add(m);
     history.on_read(history.newest_subindex());
+    history.on_read(-1);
     if (i % 100 == 50) history.write_newest_acknowledged(history.newest_subindex());
     if (i == 500) history.write_flags(diag::kFlagAcknowledgeMode);
     if (i % 100 == 99) history.write_newest_acknowledged(0);

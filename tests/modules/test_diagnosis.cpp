@@ -199,3 +199,30 @@ TEST_F(DiagnosisTest, WithoutDcTheTimeStampIsLocal) {
 
 }  // namespace
 }  // namespace rackcat::modules::testing
+
+namespace rackcat::modules::testing {
+namespace {
+
+// ETG.1020 ch. 13: 0x10F3:04 is TxPDO-mappable; 0x1BFF maps it (bit 0 of its byte).
+TEST_F(RackTest, NewMessagesAvailableReachesTheProcessData) {
+  coe::Object& tx = obj(0x1C13);
+  tx.set_u(0, 0);
+  tx.set_u(1, 0x1BFF);
+  tx.set_u(0, 1);
+  tx.hooks.after_write(tx, -1);
+  go(EsmState::Init, EsmState::PreOp);
+  go(EsmState::PreOp, EsmState::SafeOp);
+  ASSERT_EQ(device.input_bytes(), 1u);
+  cycle();
+  const uint8_t before = in[0];
+  rack.set_sensor_open(at(1, 15).module().number, 0, true);
+  cycle();
+  EXPECT_EQ(in[0], 1) << "before " << int(before);
+  auto& h = const_cast<coe::diag::History&>(device.diagnosis());
+  h.on_read(h.newest_subindex());
+  cycle();
+  EXPECT_EQ(in[0], 0);
+}
+
+}  // namespace
+}  // namespace rackcat::modules::testing
