@@ -1,6 +1,8 @@
-// `rackcat od [--config FILE] [--format text|json] [--state-dir DIR]`: prints the whole object
-// dictionary of the rack (index, subindex, name, type, bit size, access, PDO mapping, value),
-// with stored parameters applied as the running device would load them.
+// `rackcat od [--config FILE] [--format text|json] [--state-dir DIR] [--layout]`: prints the
+// whole object dictionary of the rack (index, subindex, name, type, bit size, access, PDO
+// mapping, value), with stored parameters applied as the running device would load them.
+// --layout prints instead where each PDO entry of the current assignment sits in the master's
+// process image: byte and bit offset (apps/pdo_layout.hpp).
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -10,6 +12,7 @@
 #include <string>
 
 #include "apps/commands.hpp"
+#include "apps/pdo_layout.hpp"
 #include "apps/rack_slave/rack_loading.hpp"
 #include "coe/data_type.hpp"
 #include "coe/object_dictionary.hpp"
@@ -26,6 +29,7 @@ struct OdOptions {
   std::string config;
   std::string format = "text";
   std::string state_dir;
+  bool layout = false;
 };
 
 std::string type_name(const coe::ObjectDictionary& od, const coe::Entry& e) {
@@ -168,13 +172,65 @@ void print_json(coe::ObjectDictionary& od) {
   std::cout << nlohmann::json{{"enums", enums}, {"objects", objects}}.dump(2) << "\n";
 }
 
+void print_layout_text(const mdp::Device& device, const PdoLayout& layout) {
+  const unsigned out_bytes = device.output_bytes();
+  std::printf(
+      "process image of %s (current PDO assignment)\n"
+      "offsets: byte.bit within the slave's output (SM2) or input (SM3) area; 'iomap' is the\n"
+      "byte in a master's image holding this one slave (SOEM/pysoem: outputs first, then\n"
+      "inputs): outputs at 0, inputs at %u\n",
+      device.config().source.c_str(), out_bytes);
+  for (int pass = 0; pass < 2; ++pass) {
+    const bool output = pass == 0;
+    std::printf("\n%s: %u byte(s)\n", output ? "outputs (RxPDO, master -> slave, SM2)"
+                                             : "inputs (TxPDO, slave -> master, SM3)",
+                output ? device.output_bytes() : device.input_bytes());
+    std::printf("  %6s %5s %3s %4s  %-6s  %-9s  %s\n", "iomap", "byte", "bit", "bits", "pdo",
+                "entry", "name");
+    for (const auto& e : layout.entries) {
+      if (e.output != output) continue;
+      const unsigned byte = e.bit_offset / 8;
+      std::printf("  %6u %5u %3u %4u  0x%04X  %04X:%02X    %s\n", byte + (output ? 0 : out_bytes),
+                  byte, e.bit_offset % 8, e.bits, e.pdo, e.index, e.subindex, e.name.c_str());
+    }
+  }
+}
+
+void print_layout_json(const mdp::Device& device, const PdoLayout& layout) {
+  nlohmann::json entries = nlohmann::json::array();
+  for (const auto& e : layout.entries) {
+    const unsigned byte = e.bit_offset / 8;
+    entries.push_back({{"direction", e.output ? "output" : "input"},
+                       {"pdo", fmt::format("0x{:04X}", e.pdo)},
+                       {"index", fmt::format("0x{:04X}", e.index)},
+                       {"subindex", e.subindex},
+                       {"bits", e.bits},
+                       {"byte", byte},
+                       {"bit", e.bit_offset % 8},
+                       {"iomap_byte", byte + (e.output ? 0U : device.output_bytes())},
+                       {"name", e.name}});
+  }
+  std::cout << nlohmann::json{{"output_bytes", device.output_bytes()},
+                              {"input_bytes", device.input_bytes()},
+                              {"entries", std::move(entries)}}
+                   .dump(2)
+            << "\n";
+}
+
 void run_od(const OdOptions& opt) {
   auto config = load_rack_or_report(opt.config);
   if (!config) exit_with(2);
   mdp::DeviceOptions dopt;
   dopt.state_dir = opt.state_dir;
   mdp::Device device(std::move(*config), dopt);
-  if (opt.format == "json") {
+  if (opt.layout) {
+    const PdoLayout layout = pdo_layout(device.dictionary());
+    if (opt.format == "json") {
+      print_layout_json(device, layout);
+    } else {
+      print_layout_text(device, layout);
+    }
+  } else if (opt.format == "json") {
     print_json(device.dictionary());
   } else {
     print_text(device.dictionary());
@@ -189,6 +245,8 @@ void add_od(CLI::App& app) {
   cmd->add_option("--format", opt->format, "Output format")->check(CLI::IsMember({"text", "json"}));
   cmd->add_option("--state-dir", opt->state_dir,
                   "Directory of the stored parameters (default $XDG_STATE_HOME/rackcat)");
+  cmd->add_flag("--layout", opt->layout,
+                "Print the process image instead: each PDO entry's byte and bit offset");
   cmd->callback([opt] { run_od(*opt); });
 }
 

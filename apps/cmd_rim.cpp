@@ -14,9 +14,11 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "apps/commands.hpp"
+#include "apps/rack_slave/rack_loading.hpp"
 #include "mdp/rack_config.hpp"
 #include "modules/canopen/socketcan.hpp"
 #include "modules/rack/events.hpp"
@@ -52,13 +54,9 @@ Micros now_us(std::chrono::steady_clock::time_point t0) {
 }
 
 int run_rim(const RimArgs& a) {
-  mdp::RackConfig rack;
-  try {
-    rack = a.config.empty() ? mdp::default_rack() : mdp::load_rack_config(a.config);
-  } catch (const mdp::ConfigError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
-  }
+  auto loaded = load_rack_or_report(a.config);
+  if (!loaded) return 2;
+  const mdp::RackConfig rack = std::move(*loaded);
   if (!a.watch && a.rims.size() != 1) {
     std::fprintf(stderr, "rackcat rim: give exactly one --rim N (or --watch)\n");
     return 2;

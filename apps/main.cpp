@@ -5,6 +5,7 @@
 #include <string>
 
 #include "apps/commands.hpp"
+#include "rackcat_version.hpp"  // generated: cmake/rackcat_version.cmake
 
 namespace rackcat::apps {
 namespace {
@@ -37,7 +38,14 @@ int main(int argc, char** argv) {
   try {
     CLI::App app{"rackcat: an emulated EtherCAT modular I/O rack (Fusion.IO-style MDP device)"};
     app.require_subcommand(1);
+    const std::string version =
+        std::string("rackcat ") + RACKCAT_VERSION + " (git " + RACKCAT_GIT_REVISION + ")";
+    app.set_version_flag("--version", version, "Print the version and exit");
     rackcat::apps::register_all(app);
+    // `rackcat SUBCOMMAND --version` too.
+    for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      sub->set_version_flag("--version", version, "Print the version and exit");
+    }
     try {
       app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -8,7 +8,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <charconv>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -31,7 +34,10 @@ std::string bounded(std::string text) {
 }  // namespace
 
 ConfigError::ConfigError(std::string file, int line, std::string problem)
-    : std::runtime_error(bounded(file) + ":" + std::to_string(line) + ": " + bounded(problem)),
+    // Line 0: the file as a whole (it cannot be read): "FILE: problem".
+    : std::runtime_error(line > 0 ? bounded(file) + ":" + std::to_string(line) + ": " +
+                                        bounded(problem)
+                                  : bounded(file) + ": " + bounded(problem)),
       file_(std::move(file)),
       line_(line),
       problem_(bounded(std::move(problem))) {}
@@ -225,7 +231,17 @@ class Parser {
                           std::to_string(count) + ")");
     }
     sc.slot = static_cast<uint8_t>(s);
-    if (!n["card"]) fail(n, "slot " + std::to_string(s) + " without 'card'");
+    if (!n["card"]) {
+      // A misspelt 'card' is an unknown key, not a missing card.
+      for (const auto& kv : n) {
+        const std::string key = kv.first.as<std::string>();
+        if (key != "slot" && key != "channels" && key != "loopback" && key != "oversampling") {
+          fail(kv.first, "slot " + std::to_string(s) + ": unknown key '" + key +
+                             "' (a slot entry needs 'card')");
+        }
+      }
+      fail(n, "slot " + std::to_string(s) + " without 'card'");
+    }
     const YAML::Node cn = n["card"];
     const std::string text = string(cn, "card", 32);
     const CardType* card = nullptr;
@@ -526,8 +542,15 @@ RackConfig parse_rack_config(std::string_view yaml_text, const std::string& file
 }
 
 RackConfig load_rack_config(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw ConfigError(path, 0, "cannot read the rack file: it is a directory");
+  }
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(path, 0, "cannot read the rack file");
+  if (!in) {
+    const int err = errno;
+    throw ConfigError(path, 0, std::string("cannot read the rack file: ") + std::strerror(err));
+  }
   std::ostringstream ss;
   ss << in.rdbuf();
   return parse_rack_config(ss.str(), path);

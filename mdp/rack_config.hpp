@@ -2,7 +2,8 @@
 // options, loaded from a YAML file (yaml-cpp) or the built-in default rack. Modules are numbered
 // RIM by RIM, slot by slot (ETG.5001.1 module position order; guide §1 "nn = module number - 1").
 //
-// Every configuration error is a ConfigError whose what() is ONE line "FILE:LINE: problem";
+// Every configuration error is a ConfigError whose what() is ONE line "FILE:LINE: problem"
+// ("FILE: problem" when it concerns the file as a whole, e.g. it cannot be read);
 // the apps map it to exit code 2. The file format is documented in docs/MDP.md and
 // examples/default-rack.yaml.
 #pragma once

@@ -1,7 +1,9 @@
 #include "modules/signals/source_factory.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <numbers>
@@ -64,6 +66,17 @@ class Params {
   }
   void mark(std::initializer_list<const char*> keys) {
     for (const char* k : keys) used_.insert(k);
+  }
+  // Before anything is read: a misspelt parameter is named as such, not reported as a
+  // missing one ("amplitud" -> unknown parameter, not "give 'frequency' or 'period_s'").
+  void check_known(std::initializer_list<std::string_view> known) const {
+    for (const auto& [k, v] : p_) {
+      if (is_channel_option_key(k) || k == "source") continue;
+      if (std::find(known.begin(), known.end(), k) == known.end()) {
+        throw std::invalid_argument(
+            fmt::format("{}: unknown parameter '{}' (known: {})", kind_, k, fmt::join(known, ", ")));
+      }
+    }
   }
   // Every parameter must be understood: a typo must not silently fall back to a default.
   void check_unused() const {
@@ -176,6 +189,23 @@ std::unique_ptr<StateSpacePlant> make_plant(
 std::unique_ptr<Source> make_source(std::string_view kind, const SourceParams& params,
                                     SourceContext& ctx) {
   Params p(kind, params);
+  if (kind == "constant") {
+    p.check_known({"value"});
+  } else if (kind == "ramp") {
+    p.check_known({"from", "to", "period_s"});
+  } else if (kind == "sine") {
+    p.check_known({"amplitude", "frequency", "period_s", "offset", "phase"});
+  } else if (kind == "noise") {
+    p.check_known({"mean", "stddev", "seed"});
+  } else if (kind == "replay") {
+    p.check_known({"file", "loop"});
+  } else if (kind == "clock") {
+    p.check_known({"tick_us"});
+  } else if (kind == "loopback") {
+    p.check_known({"module", "rim", "slot", "channel", "gain", "offset"});
+  } else if (kind == "plant") {
+    p.check_known({"plant", "a", "b", "c", "d", "x0", "inputs", "output"});
+  }
   std::unique_ptr<Source> s;
   if (kind == "constant") {
     s = std::make_unique<ConstantSource>(p.number("value", 0.0));

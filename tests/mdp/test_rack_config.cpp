@@ -201,5 +201,22 @@ TEST(RackConfig, AnErrorQuotingAHugeValueIsStillOneShortLine) {
   EXPECT_EQ(err.rfind("rack.yaml:", 0), 0u) << err.substr(0, 200);
 }
 
+TEST(RackConfigMessages, MisspeltCardIsAnUnknownKeyNotAMissingCard) {
+  EXPECT_EQ(error_of(std::string(kHeader) + "      - {slot: 1, crad: CDO-10}\n"),
+            "rack.yaml:5: slot 1: unknown key 'crad' (a slot entry needs 'card')");
+}
+
+TEST(RackConfigMessages, UnreadableFileSaysWhyWithoutALineNumber) {
+  try {
+    load_rack_config("/nonexistent-rackcat-dir/rack.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(),
+                 "/nonexistent-rackcat-dir/rack.yaml: cannot read the rack file: No such file "
+                 "or directory");
+    EXPECT_EQ(e.line(), 0);
+  }
+}
+
 }  // namespace
 }  // namespace rackcat::mdp

@@ -54,6 +54,9 @@ TEST(SourceFactory, RejectsBadDescriptionsWithTheReason) {
             std::string::npos);
   EXPECT_NE(reason("constant", {{"valeu", "1"}}).find("unknown parameter 'valeu'"),
             std::string::npos);
+  // A misspelt parameter is named as such before anything reports a missing one.
+  EXPECT_NE(reason("sine", {{"amplitud", "5"}}).find("sine: unknown parameter 'amplitud'"),
+            std::string::npos);
   EXPECT_NE(
       reason("loopback", {{"rim", "1"}, {"slot", "12"}, {"channel", "0"}}).find("no such output"),
       std::string::npos);
