@@ -18,7 +18,10 @@
 #include <string>
 #include <vector>
 
+#include <spdlog/spdlog.h>
+
 #include "apps/commands.hpp"
+#include "apps/event_logger.hpp"
 #include "apps/rack_slave/rack_loading.hpp"
 #include "apps/rack_slave/rack_slave.hpp"
 #include "ecat/host/runner.hpp"
@@ -49,12 +52,14 @@ struct RunArgs {
   std::string rim_bus;   // "can:IFACE": RIMs are CANopen nodes on that bus (docs/CAN.md)
   uint16_t boot_mailbox_size = mdp::sm::kBootMailboxSize;
   std::optional<uint32_t> foe_password;
+  LogOptions log;
 };
 
 int run(const RunArgs& a) {
   // The configuration first: a bad file must not need a network interface to be reported.
   std::vector<std::unique_ptr<RackSlave>> racks;
   const std::string state_dir = a.state_dir.empty() ? mdp::default_state_dir() : a.state_dir;
+  configure_logging(a.log);
   auto config = load_rack_or_report(a.config);
   if (!config) return ecat::kExitUsage;
   config->control.boot_mailbox_size = a.boot_mailbox_size;
@@ -71,7 +76,7 @@ int run(const RunArgs& a) {
   // From here on everything runs as the unprivileged user: the state directory and the files
   // channel sources name are opened with its rights.
   const auto state = mdp::StateDirectory::open(state_dir);
-  if (!state->usable()) std::fprintf(stderr, "rackcat: %s\n", state->problem().c_str());
+  if (!state->usable()) spdlog::warn("rackcat: {}", state->problem());
   racks.reserve(static_cast<size_t>(a.slaves));
   try {
     // Channel sources of the rack file are parsed by the drivers: their errors are
@@ -107,15 +112,16 @@ int run(const RunArgs& a) {
     });
   }
 
+  // From here on the cyclic path reports its events; this thread writes them (base/event_log).
+  const EventLogger event_logger;
   const auto& cfg = racks.front()->device().config();
-  std::printf("rackcat: %d slave(s) on %s (%s), rack %s: %zu RIM(s), %zu module(s)\n", a.slaves,
-              a.iface.c_str(), a.busy_poll ? "busy-poll" : "blocking", cfg.source.c_str(),
-              cfg.rims.size(), cfg.modules.size());
-  std::printf("rackcat: state directory %s; %s; %s\n", state_dir.c_str(),
-              racks.front()->device().load_report().c_str(),
-              racks.front()->device().firmware_report().c_str());
+  spdlog::info("rackcat: {} slave(s) on {} ({}), rack {}: {} RIM(s), {} module(s)", a.slaves,
+               a.iface, a.busy_poll ? "busy-poll" : "blocking", cfg.source, cfg.rims.size(),
+               cfg.modules.size());
+  spdlog::info("rackcat: state directory {}; {}; {}", state_dir,
+               racks.front()->device().load_report(), racks.front()->device().firmware_report());
   for (size_t i = 1; i < racks.size(); ++i) {
-    std::printf("rackcat: slave %zu: %s\n", i, racks[i]->device().load_report().c_str());
+    spdlog::info("rackcat: slave {}: {}", i, racks[i]->device().load_report());
   }
   if (!a.no_ptys) racks.front()->rack().start_uart_ptys();
   // The control API of every slave (docs/MODULES.md "Control API"): a fresh secret in the state
@@ -154,8 +160,8 @@ int run(const RunArgs& a) {
       std::fprintf(stderr, "rackcat: control API not started: %s\n", error.c_str());
       return ecat::kExitUsage;
     }
-    std::printf("rackcat: control API on http://127.0.0.1:%u (token in %s/%s)\n", port,
-                state_dir.c_str(), modules::kTokenFileName);
+    spdlog::info("rackcat: control API on http://127.0.0.1:{} (token in {}/{})", port, state_dir,
+                 modules::kTokenFileName);
   }
   // RIMs on a CAN bus (docs/CAN.md): slave 0's rack follows their heartbeats and PDOs.
   std::unique_ptr<modules::canopen::ThreadedRimLink> rim_link;
@@ -170,15 +176,13 @@ int run(const RunArgs& a) {
       std::fprintf(stderr, "rackcat: --rim-bus %s: %s\n", a.rim_bus.c_str(), e.what());
       return ecat::kExitUsage;
     }
-    std::printf("rackcat: RIMs on CAN interface %s\n", a.rim_bus.c_str() + 4);
+    spdlog::info("rackcat: RIMs on CAN interface {}", a.rim_bus.substr(4));
   }
-  if (!a.pcap.empty()) std::printf("rackcat: capturing to %s\n", a.pcap.c_str());
-  std::fflush(stdout);
+  if (!a.pcap.empty()) spdlog::info("rackcat: capturing to {}", a.pcap);
 
   const int rc = runner.run(segment);
-  std::printf("rackcat: stopped; %llu frames received, %llu sent\n",
-              static_cast<unsigned long long>(runner.link().frames_received()),
-              static_cast<unsigned long long>(runner.link().frames_sent()));
+  spdlog::info("rackcat: stopped; {} frames received, {} sent", runner.link().frames_received(),
+               runner.link().frames_sent());
   return rc;
 }
 
@@ -214,6 +218,7 @@ void add_run(CLI::App& app) {
       ->check(CLI::Range(mdp::sm::kMinMailboxSize, mdp::sm::kMaxMailboxSize));
   cmd->add_option("--foe-password", args->foe_password,
                   "password FoE requests must carry (UINT32, 0x.. accepted; docs/FOE.md)");
+  add_log_options(cmd, args->log);
   cmd->callback([args] { exit_with(run(*args)); });
 }
 

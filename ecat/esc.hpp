@@ -17,6 +17,10 @@
 #include "ecat/application.hpp"
 #include "ecat/clock.hpp"
 
+namespace rackcat::base {
+enum class EventKind : uint8_t;
+}  // namespace rackcat::base
+
 namespace rackcat::ecat {
 
 // Identification values the ESC reports (0x0000-0x0009) and SII interface options.
@@ -191,6 +195,8 @@ class Esc {
   uint16_t esm_check_dc() const;
   void esm_enter(AlState to);
   void esm_error(AlState stay_or_fall_to, uint16_t code);
+  // Reports a transition or an error to the log (base/event_log.hpp); allocation-free.
+  void esm_log(base::EventKind kind, uint8_t from, uint8_t to, uint16_t code) const;
   void esm_write_status();
   void esm_sm_changed();
   // watchdog.cpp

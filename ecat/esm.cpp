@@ -3,6 +3,7 @@
 // and its acknowledge.
 #include <array>
 
+#include "base/event_log.hpp"
 #include "ecat/al_status_code.hpp"
 #include "ecat/esc.hpp"
 #include "ecat/le.hpp"
@@ -206,6 +207,15 @@ void Esc::esm_sm_changed() {
   }
 }
 
+void Esc::esm_log(base::EventKind kind, uint8_t from, uint8_t to, uint16_t code) const {
+  base::log_event({.kind = kind,
+                   .a = from,
+                   .b = to,
+                   .c = mem_[reg::kAlControl],
+                   .code = code,
+                   .station = le::get16(&mem_[reg::kStationAddress])});
+}
+
 void Esc::esm_enter(AlState to) {
   const AlState from = state_;
   if (to == AlState::Init) {
@@ -238,6 +248,8 @@ void Esc::esm_enter(AlState to) {
     watchdog_trigger(pass_.port0_ns);  // the watchdog starts counting with OP
   }
   esm_write_status();
+  esm_log(base::EventKind::EsmTransition, static_cast<uint8_t>(from), static_cast<uint8_t>(to),
+          le::get16(&mem_[reg::kAlStatusCode]));
   app_.on_state_changed(from, to);
 }
 
@@ -262,6 +274,8 @@ void Esc::application_restart() {
 }
 
 void Esc::esm_error(AlState stay_or_fall_to, uint16_t code) {
+  esm_log(base::EventKind::EsmError, static_cast<uint8_t>(state_),
+          static_cast<uint8_t>(stay_or_fall_to), code);
   if (stay_or_fall_to != state_) esm_enter(stay_or_fall_to);
   mem_[reg::kAlStatus] |= kErrorFlag;
   le::put16(&mem_[reg::kAlStatusCode], code);

@@ -2,6 +2,7 @@
 // completed write of a SyncManager with watchdog trigger enabled (SM2 in practice); on expiry
 // the status bit drops, the counter counts and an OP slave falls to SAFEOP with AL status
 // 0x001B after putting its outputs in the safe state.
+#include "base/event_log.hpp"
 #include "ecat/esc.hpp"
 #include "ecat/le.hpp"
 #include "ecat/registers.hpp"
@@ -29,6 +30,10 @@ void Esc::watchdog_expired() {
   watchdog_armed_ = false;
   mem_[reg::kWatchdogStatusProcessData] &= static_cast<uint8_t>(~0x01);
   if (mem_[reg::kWatchdogCounterProcessData] != 0xFF) ++mem_[reg::kWatchdogCounterProcessData];
+  base::log_event({.kind = base::EventKind::WatchdogExpired,
+                   .a = static_cast<uint8_t>(state_),
+                   .station = le::get16(&mem_[reg::kStationAddress]),
+                   .value = mem_[reg::kWatchdogCounterProcessData]});
   mem_[reg::kAlEventRequest] |= 0x40;
   if (state_ == AlState::Op) {
     app_.on_watchdog_expired();

@@ -7,6 +7,8 @@
 
 #include "mdp/command_bytes.hpp"
 
+#include "base/event_log.hpp"
+
 namespace rackcat::mdp {
 namespace {
 
@@ -153,6 +155,11 @@ void ParameterWriter::run() {
     s.running = true;
     lock.unlock();
     Result result = execute(job, request);
+    if (job == Job::Store || job == Job::Reset) {  // 0xFBF2 store, 0xFBF0 factory reset
+      base::Event e{.kind = base::EventKind::Store, .code = result.ok ? uint16_t{0} : uint16_t{1}};
+      e.set_text(job == Job::Store ? "store parameters" : "reset stored parameters");
+      base::log_event(e);
+    }
     lock.lock();
     s.running = false;
     // A newer request of the same kind queued meanwhile supersedes this result.

@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "apps/mailbox_events.hpp"
 #include "esi/rack.hpp"
 
 namespace rackcat::apps {
@@ -49,7 +50,9 @@ ecat::ProcessDataSizes RackSlave::process_data_sizes() const {
 }
 
 size_t RackSlave::on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
-  return device_->handle_mailbox(request, reply);
+  const size_t n = device_->handle_mailbox(request, reply);
+  log_mailbox_reply(reply.first(n));
+  return n;
 }
 
 size_t RackSlave::poll_mailbox(std::span<uint8_t> reply) {
@@ -60,7 +63,9 @@ size_t RackSlave::poll_mailbox(std::span<uint8_t> reply) {
     if (restart_) restart_();
     return 0;
   }
-  return device_->poll_mailbox(reply);
+  const size_t n = device_->poll_mailbox(reply);
+  log_mailbox_reply(reply.first(n));
+  return n;
 }
 
 void RackSlave::update_inputs(std::span<uint8_t> inputs) {

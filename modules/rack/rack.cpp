@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "base/event_log.hpp"
+
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -347,12 +349,33 @@ bool Rack::rim_has_mapped_process_data(uint8_t rim) const {
   return false;
 }
 
+namespace {
+// An injected fault for the log (base/event_log.hpp); nothing is formatted here.
+void log_fault(base::FaultWhat what, uint16_t module, size_t channel_or_rim, uint32_t value,
+               std::string_view text = {}) {
+  base::Event e{.kind = base::EventKind::FaultInjected,
+                .a = static_cast<uint8_t>(channel_or_rim),
+                .b = static_cast<uint8_t>(what),
+                .index = module,
+                .value = value};
+  e.set_text(text);
+  base::log_event(e);
+}
+}  // namespace
+
 void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
   auto it = rims_.find(rr);
   if (it == rims_.end()) throw std::invalid_argument(fmt::format("there is no RIM {}", rr));
   RimStatus& rim = it->second;
   const RimState prev = rim.state;
   rim.state = state;
+  if (prev != state) {
+    base::log_event({.kind = base::EventKind::RimState,
+                     .a = rr,
+                     .b = static_cast<uint8_t>(prev),
+                     .c = static_cast<uint8_t>(state),
+                     .code = comm_error ? uint16_t{1} : uint16_t{0}});
+  }
   rim.comm_error = comm_error;
   tree_.set_rim_state(rr, state, comm_error);
   for (uint16_t n : rim.modules) {
@@ -400,6 +423,7 @@ void Rack::set_fan_rpm(uint8_t rr, std::string_view zone, double rpm) {
   publish_fans();
   tree_.update();
   dirty_ = false;
+  log_fault(base::FaultWhat::FanRpm, 0, rr, static_cast<uint32_t>(rpm));
 }
 
 void Rack::set_rim_mcm_errors(uint8_t rr, uint32_t bits) {
@@ -412,6 +436,7 @@ void Rack::set_rim_mcm_errors(uint8_t rr, uint32_t bits) {
   publish_fans();
   tree_.update();
   dirty_ = false;
+  log_fault(base::FaultWhat::McmErrors, 0, rr, bits);
 }
 
 void Rack::publish_fans() {
@@ -445,6 +470,8 @@ void Rack::set_cpu_temperature(double celsius, bool publish_now) {
     throw std::invalid_argument("CPU temperature must be -55..150 degC");
   cpu_temp_ = celsius;
   if (publish_now) publish_cpu_temperature();
+  log_fault(base::FaultWhat::CpuTemperature, 0, 0,
+            static_cast<uint32_t>(static_cast<int32_t>(std::lround(celsius * 10.0))));
 }
 
 void Rack::publish_cpu_temperature() {
@@ -477,6 +504,7 @@ void Rack::set_wiring_fault(uint16_t module, size_t channel, WiringFault fault) 
     throw std::invalid_argument(
         fmt::format("module {} has {} output channels", module, d->outputs().size()));
   d->set_wiring_fault(channel, fault);
+  log_fault(base::FaultWhat::WiringFault, module, channel, static_cast<uint32_t>(fault));
   evaluate_faults();
   tree_.update();
   dirty_ = false;
@@ -492,6 +520,7 @@ void Rack::set_sensor_open(uint16_t module, size_t channel, bool open) {
     throw std::invalid_argument(
         fmt::format("module {} has {} input channels", module, d->inputs().size()));
   d->inputs()[channel].open = open;
+  log_fault(base::FaultWhat::SensorOpen, module, channel, open ? 1 : 0);
 }
 
 void Rack::set_output_fault(uint16_t module, size_t channel, bool overload, bool overtemperature) {
@@ -516,6 +545,7 @@ void Rack::set_loop_ohms(uint16_t module, size_t channel, double ohms) {
   if (!std::isfinite(ohms) || ohms < 0.0 || ohms > 65534.0)
     throw std::invalid_argument("loop_ohms must be 0..65534");
   d->inputs()[channel].loop_ohms = ohms;
+  log_fault(base::FaultWhat::LoopOhms, module, channel, static_cast<uint32_t>(ohms));
 }
 
 void Rack::set_source(uint16_t module, size_t channel, std::string_view kind,
@@ -552,6 +582,7 @@ void Rack::set_source(uint16_t module, size_t channel, std::string_view kind,
   if (ohms) set_loop_ohms(module, channel, *ohms);
   if (open) d->inputs()[channel].open = *open;
   d->inputs()[channel].source = std::move(s);
+  log_fault(base::FaultWhat::Source, module, channel, 0, kind);
 }
 
 OutputRef Rack::output_ref(uint8_t rim, uint8_t slot, uint8_t channel) {

@@ -5,6 +5,7 @@
 
 #include <optional>
 
+#include "base/event_log.hpp"
 #include "tests/ecat/test_master.hpp"
 #include "tests/support/allocation_counter.hpp"
 
@@ -54,6 +55,65 @@ TEST(NoAllocation, MalformedFramesAllocateNothing) {
   rackcat::testing::CountAllocations count;
   for (int i = 0; i < 100; ++i) line.segment->process(bad);
   EXPECT_EQ(count.allocations(), 0u);
+}
+
+// With the log on (as under `rackcat run`), the ESM reports transitions and refusals through
+// the preallocated event queue (base/event_log.hpp); pushing never allocates, also when the
+// queue is full or the rate limit drops an event.
+TEST(EventLog, EsmTransitionsAndRefusalsAreLogged) {
+  base::EventLog& log = base::event_log();
+  base::Event e;
+  while (log.pop(e)) {
+  }
+  log.enable(true);
+  Line line(2);
+  line.to_op();
+  // Back to INIT, then an invalid request (INIT -> OP: 0x0011) on every slave.
+  for (size_t k = 0; k < 2; ++k) line.master->fpwr8(Line::station(k), 0x0120, 0x01);
+  for (size_t k = 0; k < 2; ++k) line.master->fpwr8(Line::station(k), 0x0120, 0x08);
+  log.enable(false);
+  size_t transitions = 0, refusals = 0;
+  while (log.pop(e)) {
+    if (e.kind == base::EventKind::EsmTransition) ++transitions;
+    if (e.kind == base::EventKind::EsmError && e.code == 0x0011 && e.a == 0x01 && e.b == 0x01 &&
+        (e.c & 0x0F) == 0x08) {
+      ++refusals;
+    }
+  }
+  EXPECT_EQ(transitions, 2u * 4u);  // INIT->PREOP->SAFEOP->OP->INIT on each slave
+  EXPECT_EQ(refusals, 2u);
+}
+
+TEST(EventLog, PushAllocatesNothingAndCountsWhatItDrops) {
+  base::EventLog& log = base::event_log();
+  base::Event e;
+  while (log.pop(e)) {
+  }
+  (void)log.take_dropped();
+  log.enable(true);
+  g_allocations = 0;
+  g_counting = true;
+  for (size_t i = 0; i < base::EventLog::kCapacity + 10; ++i) {
+    log.push({.kind = base::EventKind::RimState, .a = 1});
+  }
+  size_t passed = 0;
+  for (int i = 0; i < 100; ++i) passed += log.push({.kind = base::EventKind::SdoAbort}) ? 1 : 0;
+  g_counting = false;
+  log.enable(false);
+  EXPECT_EQ(g_allocations, 0u);
+  EXPECT_EQ(passed, 0u);                // the queue is full
+  EXPECT_GE(log.take_dropped(), 10u);   // ... and says how much it lost
+  size_t n = 0;
+  while (log.pop(e)) ++n;
+  EXPECT_EQ(n, base::EventLog::kCapacity);
+  // Rate limit: at most kRateLimitPerSecond SDO aborts a second pass.
+  log.enable(true);
+  passed = 0;
+  for (int i = 0; i < 100; ++i) passed += log.push({.kind = base::EventKind::SdoAbort}) ? 1 : 0;
+  log.enable(false);
+  EXPECT_LE(passed, 2 * base::EventLog::kRateLimitPerSecond);  // a second boundary may pass
+  while (log.pop(e)) {
+  }
 }
 
 }  // namespace
