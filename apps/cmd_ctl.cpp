@@ -224,8 +224,12 @@ void add_ctl(CLI::App& app) {
   set->add_option("--module", o->module, "module number")->required();
   set->add_option("--channel", o->channel, "input channel (0-based)")->required();
   auto* value = set->add_option("--value", o->value_opt, "a constant value (V, degC or 0/1)");
-  auto* source = set->add_option("--source", o->source,
-                                 "constant, ramp, sine, noise, replay, loopback or plant");
+  auto* source = set->add_option(
+      "--source", o->source,
+      "constant (value), ramp (from, to, period_s), sine (amplitude, frequency or period_s, "
+      "offset, phase), noise (mean, stddev, seed), replay (file, loop), loopback (module or "
+      "rim+slot, channel, gain, offset), plant (plant, a, b, c, d, x0, inputs, output) or "
+      "clock (tick_us); parameters with --param");
   value->excludes(source);
   set->add_option("--param", o->params, "source parameter key=value (repeatable)")->needs(source);
   set->callback([o] {

@@ -37,6 +37,8 @@ if not BUILD.is_absolute():
 # The wire test slave (tests/ecat_wire_slave): hand-built SII, outputs looped back to inputs.
 TEST_SLAVE_CMD = f"{BUILD}/ecat_wire_slave --iface {{iface}} --slaves {{slaves}}"
 DEFAULT_SLAVE_CMD = TEST_SLAVE_CMD
+# The rackcat_line fixture (python/, the master developers' package) runs this build's rackcat.
+os.environ.setdefault("RACKCAT_BIN", str(BUILD / "rackcat"))
 ETHERTYPE_ECAT = 0x88A4
 _counter = itertools.count()
 
