@@ -624,6 +624,7 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     }
     return run([r, module, channel, kind, params, prebuilt] {
       r->set_source(module, channel, kind, params, std::move(*prebuilt));
+      r->sample_inputs(module);  // the answer shows the new value, not the last cycle's
       r->refresh();
       return Response{200, module_json(*r, *r->driver(module))};
     });

@@ -636,6 +636,13 @@ SourceContext Rack::source_context() {
   return ctx;
 }
 
+void Rack::sample_inputs(uint16_t module) {
+  CardDriver* d = driver(module);
+  if (d != nullptr && rim_online(module_rim_[module - 1])) {
+    d->write_inputs(now() - t0_, options_.cycle_time_s);
+  }
+}
+
 void Rack::refresh() {
   if (state_ != coe::EsmState::SafeOp && state_ != coe::EsmState::Op) {
     // No process data runs: sample the inputs here so SDO reads and `ctl list` are live.

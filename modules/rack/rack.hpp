@@ -138,6 +138,9 @@ class Rack : public mdp::CycleListener {
   // Publish everything derived (fans, event status, exception tree) now; the control API
   // calls it so changes show up in PREOP too, where no process data runs.
   void refresh();
+  // Samples one module's inputs now (its sources at the current time), so an answer to a
+  // change shows the state after it, in OP too.
+  void sample_inputs(uint16_t module);
 
  private:
   OutputRef output_ref(uint8_t rim, uint8_t slot, uint8_t channel);
