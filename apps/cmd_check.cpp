@@ -1,8 +1,8 @@
 // `rackcat check FILE`: validates a rack file the way every other subcommand does
-// (apps/rack_slave/rack_loading.hpp: parse, then build the device and its drivers offline) and prints the
-// device it describes: identity, RIMs with their slot cards and module numbers, the default
-// process data and the size of the object dictionary. A bad file is one line
-// "FILE:LINE: problem" and exit code 2; a good one exits 0.
+// (apps/rack_slave/rack_loading.hpp: parse, then build the device and its drivers offline) and
+// prints the device it describes: identity, RIMs with their slot cards and module numbers, the
+// default process data and the size of the object dictionary. A bad file is one line "FILE:LINE:
+// problem" and exit code 2; a good one exits 0.
 #include <cstdio>
 #include <string>
 
@@ -25,8 +25,8 @@ int run_check(const std::string& file) {
   std::printf("device: '%s' vendor 0x%08X product 0x%08X revision 0x%08X serial %u\n",
               name ? name->get_string(0).c_str() : "", cfg.control.vendor_id,
               cfg.control.product_code, cfg.control.revision, cfg.control.serial);
-  std::printf("control module: %s, Detect Modules Override %d\n",
-              cfg.control.part_number.c_str(), cfg.detect_modules_override ? 1 : 0);
+  std::printf("control module: %s, Detect Modules Override %d\n", cfg.control.part_number.c_str(),
+              cfg.detect_modules_override ? 1 : 0);
   for (const mdp::Rim& rim : cfg.rims) {
     size_t count = 0;
     for (const mdp::Module& m : cfg.modules) count += m.rim == rim.number ? 1 : 0;

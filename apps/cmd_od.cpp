@@ -182,9 +182,10 @@ void print_layout_text(const mdp::Device& device, const PdoLayout& layout) {
       device.config().source.c_str(), out_bytes);
   for (int pass = 0; pass < 2; ++pass) {
     const bool output = pass == 0;
-    std::printf("\n%s: %u byte(s)\n", output ? "outputs (RxPDO, master -> slave, SM2)"
-                                             : "inputs (TxPDO, slave -> master, SM3)",
-                output ? device.output_bytes() : device.input_bytes());
+    std::printf(
+        "\n%s: %u byte(s)\n",
+        output ? "outputs (RxPDO, master -> slave, SM2)" : "inputs (TxPDO, slave -> master, SM3)",
+        output ? device.output_bytes() : device.input_bytes());
     std::printf("  %6s %5s %3s %4s  %-6s  %-9s  %s\n", "iomap", "byte", "bit", "bits", "pdo",
                 "entry", "name");
     for (const auto& e : layout.entries) {

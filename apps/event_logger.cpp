@@ -82,8 +82,8 @@ void add_log_options(CLI::App* cmd, LogOptions& options) {
 }
 
 void configure_logging(const LogOptions& options) {
-  auto logger = std::make_shared<spdlog::logger>(
-      "rackcat", std::make_shared<spdlog::sinks::stdout_sink_mt>());
+  auto logger = std::make_shared<spdlog::logger>("rackcat",
+                                                 std::make_shared<spdlog::sinks::stdout_sink_mt>());
   if (options.format == "json") {
     logger->set_formatter(std::make_unique<JsonLinesFormatter>());
   } else {
@@ -125,10 +125,10 @@ std::string describe_event(const base::Event& e, int& level, nlohmann::json& f) 
       level = spdlog::level::warn;
       if (e.a == e.b && requested != e.a) {
         f["event"] = "esm_refused";
-        return fmt::format("ESM refused {} -> {} requested by the master (AL control 0x{:02X}): "
-                           "AL status code {}; stays in {} with the error flag",
-                           state_name(e.a), state_name(requested), e.c, code_text(e.code),
-                           state_name(e.a));
+        return fmt::format(
+            "ESM refused {} -> {} requested by the master (AL control 0x{:02X}): "
+            "AL status code {}; stays in {} with the error flag",
+            state_name(e.a), state_name(requested), e.c, code_text(e.code), state_name(e.a));
       }
       return fmt::format("ESM error in {}: AL status code {}; {} with the error flag",
                          state_name(e.a), code_text(e.code),

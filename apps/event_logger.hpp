@@ -9,8 +9,8 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
-#include <string>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <thread>
 
 #include "base/event_log.hpp"
@@ -18,7 +18,7 @@
 namespace rackcat::apps {
 
 struct LogOptions {
-  std::string level = "info";  // trace debug info warn error critical off
+  std::string level = "info";   // trace debug info warn error critical off
   std::string format = "text";  // text | json
 };
 

@@ -23,11 +23,10 @@ inline void log_mailbox_reply(std::span<const uint8_t> reply) {
   if (type == 0x03 && reply.size() >= 16) {
     const unsigned service = u16(6) >> 12;
     if ((service == 2 || service == 3) && (reply[8] & 0xE0) == 0x80) {
-      const uint32_t abort = static_cast<uint32_t>(u16(12)) | (static_cast<uint32_t>(u16(14)) << 16);
-      base::log_event({.kind = base::EventKind::SdoAbort,
-                       .a = reply[11],
-                       .index = u16(9),
-                       .value = abort});
+      const uint32_t abort =
+          static_cast<uint32_t>(u16(12)) | (static_cast<uint32_t>(u16(14)) << 16);
+      base::log_event(
+          {.kind = base::EventKind::SdoAbort, .a = reply[11], .index = u16(9), .value = abort});
     }
   }
 }

@@ -35,9 +35,9 @@ std::string bounded(std::string text) {
 
 ConfigError::ConfigError(std::string file, int line, std::string problem)
     // Line 0: the file as a whole (it cannot be read): "FILE: problem".
-    : std::runtime_error(line > 0 ? bounded(file) + ":" + std::to_string(line) + ": " +
-                                        bounded(problem)
-                                  : bounded(file) + ": " + bounded(problem)),
+    : std::runtime_error(line > 0
+                             ? bounded(file) + ":" + std::to_string(line) + ": " + bounded(problem)
+                             : bounded(file) + ": " + bounded(problem)),
       file_(std::move(file)),
       line_(line),
       problem_(bounded(std::move(problem))) {}

@@ -73,8 +73,8 @@ class Params {
     for (const auto& [k, v] : p_) {
       if (is_channel_option_key(k) || k == "source") continue;
       if (std::find(known.begin(), known.end(), k) == known.end()) {
-        throw std::invalid_argument(
-            fmt::format("{}: unknown parameter '{}' (known: {})", kind_, k, fmt::join(known, ", ")));
+        throw std::invalid_argument(fmt::format("{}: unknown parameter '{}' (known: {})", kind_, k,
+                                                fmt::join(known, ", ")));
       }
     }
   }

@@ -101,8 +101,8 @@ TEST(EventLog, PushAllocatesNothingAndCountsWhatItDrops) {
   g_counting = false;
   log.enable(false);
   EXPECT_EQ(g_allocations, 0u);
-  EXPECT_EQ(passed, 0u);                // the queue is full
-  EXPECT_GE(log.take_dropped(), 10u);   // ... and says how much it lost
+  EXPECT_EQ(passed, 0u);               // the queue is full
+  EXPECT_GE(log.take_dropped(), 10u);  // ... and says how much it lost
   size_t n = 0;
   while (log.pop(e)) ++n;
   EXPECT_EQ(n, base::EventLog::kCapacity);
