@@ -221,7 +221,10 @@ EventLogger::~EventLogger() {
   stop_.store(true);
   if (thread_.joinable()) thread_.join();
   base::event_log().enable(false);
-  drain();
+  try {
+    drain();  // what is left; formatting can throw (bad_alloc), a destructor must not
+  } catch (...) {
+  }
 }
 
 void EventLogger::run() {
