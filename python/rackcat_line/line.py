@@ -88,8 +88,13 @@ class VirtualLine:
             assert self._proc is not None
             if self._proc.poll() is not None:
                 raise LineError(f"rackcat exited with {self._proc.returncode}:\n{self.log()}")
-            if "control API on" in self.log() or (
-                    "--no-control" in self.extra_args and "slave(s) on" in self.log()):
+            if "control API on" in self.log():
+                # The API's bearer token: rackcat writes it into its state directory.
+                token = Path(self._state_dir or "") / "state" / "control-token"
+                if token.exists():
+                    self.control.token = token.read_text().strip()
+                return
+            if "--no-control" in self.extra_args and "slave(s) on" in self.log():
                 return
             time.sleep(0.05)
         raise LineError(f"rackcat did not start within {self.start_timeout_s} s:\n{self.log()}")

@@ -26,7 +26,7 @@ bad amplitud "amplitud.yaml:9: RIM 1 slot 2 channel 0: sine: unknown parameter '
           - {channel: 0, source: sine, amplitud: 5.0}'
 bad cardopt "cardopt.yaml:6: slot 2: card CAI-15 has no option 'colour' (or 'red' is not a number)" \
 '      - {slot: 2, card: CAI-15, colour: red}'
-bad replay "replay.yaml:9: RIM 1 slot 2 channel 0: replay: missing.csv: not a readable regular file" \
+bad replay "replay.yaml:9: RIM 1 slot 2 channel 0: missing.csv: no such file below ." \
 '      - slot: 2
         card: CAI-15
         channels:
