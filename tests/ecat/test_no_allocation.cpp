@@ -101,7 +101,9 @@ TEST(EventLog, PushAllocatesNothingAndCountsWhatItDrops) {
   allocations = count->allocations();
   count.reset();
   log.enable(false);
-  if (rackcat::testing::CountAllocations::available()) EXPECT_EQ(allocations, 0u);
+  if (rackcat::testing::CountAllocations::available()) {
+    EXPECT_EQ(allocations, 0u);
+  }
   EXPECT_EQ(passed, 0u);               // the queue is full
   EXPECT_GE(log.take_dropped(), 10u);  // ... and says how much it lost
   size_t n = 0;
