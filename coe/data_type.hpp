@@ -37,6 +37,21 @@ enum class DataType : uint16_t {
   Bit8 = 0x0037,
 };
 
+// Standard record types of the communication area (ETG.1000.6 §5.6.7.4.5, "Complex Data Type
+// Area" 0x0020..0x002F): the data type SDO Information gives a RECORD object that uses one.
+namespace record_type {
+inline constexpr uint16_t kPdoMapping = 0x0021;
+inline constexpr uint16_t kSdoParameter = 0x0022;
+inline constexpr uint16_t kIdentity = 0x0023;
+inline constexpr uint16_t kCommandPar = 0x0025;
+inline constexpr uint16_t kPdoParameter = 0x0027;
+inline constexpr uint16_t kEnum = 0x0028;
+inline constexpr uint16_t kSmSynchronisation = 0x0029;
+inline constexpr uint16_t kRecord = 0x002A;  // any other record
+inline constexpr uint16_t kBackupParameter = 0x002B;
+inline constexpr uint16_t kModularDeviceProfile = 0x002C;
+}  // namespace record_type
+
 // True for indices 0x0800..0x0FFF: device-specific enumerations (ETG.1000.6 §5.6.7.4.4).
 constexpr bool is_enum_type(uint16_t index) {
   return index >= 0x0800 && index <= 0x0FFF;

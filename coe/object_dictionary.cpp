@@ -29,7 +29,9 @@ Entry& Object::add(Entry e) {
   const bool sub0_slot = code_ != ObjectCode::Var && e.subindex == 0;
   if (entries_.empty() || e.bit_offset == 0) {
     uint16_t pos = entries_.empty() ? e.bit_offset : next_bit_;
-    if (!packed_ && e.bit_length >= 8 && (pos % 8) != 0) {
+    // A padding entry fills the bits up to the next entry exactly (the guide's BIT1 + pad_15
+    // of 0x2000:0B/0C are 16 bits together): it is never moved to a byte boundary.
+    if (!packed_ && !e.padding && e.bit_length >= 8 && (pos % 8) != 0) {
       pos = static_cast<uint16_t>(pos + 8 - pos % 8);
     }
     e.bit_offset = pos;

@@ -80,8 +80,12 @@ class Object;
 // Live values and command objects. All hooks are optional; a hook runs on the request path and
 // must not allocate.
 struct ObjectHooks {
-  // Refresh the image before `subindex` (or, for complete access, all entries: subindex -1)
-  // is read.
+  // The subindex the process image passes to before_read/after_write of a mapped object on the
+  // cyclic path (every cycle, all mapped entries at once): refresh or consume only what can be
+  // mapped, without allocating or formatting.
+  static constexpr int kProcessData = -2;
+  // Refresh the image before `subindex` (or, for complete access, all entries: subindex -1;
+  // for the process data, kProcessData) is read.
   std::function<void(Object&, int subindex)> before_read;
   // Validate a write before it is committed: `data` is the new bytes for `subindex`
   // (byte_length() bytes, a bit entry right-aligned in one byte), or for complete access

@@ -57,12 +57,18 @@ AbortCode ProcessImage::compile_direction(PdoDirection dir, Direction& out) {
   return AbortCode::None;
 }
 
-AbortCode ProcessImage::compile() {
+AbortCode ProcessImage::compile(PdoDirection* failed) {
   Direction rx, tx;
   if (AbortCode rc = compile_direction(PdoDirection::Rx, rx); rc != AbortCode::None) {
+    if (failed) {
+      *failed = PdoDirection::Rx;
+    }
     return rc;
   }
   if (AbortCode rc = compile_direction(PdoDirection::Tx, tx); rc != AbortCode::None) {
+    if (failed) {
+      *failed = PdoDirection::Tx;
+    }
     return rc;
   }
   outputs_ = std::move(rx.copies);
@@ -83,13 +89,13 @@ void ProcessImage::write_outputs(std::span<const uint8_t> sm2) {
     copy_bits(c.image, c.image_bit, sm2.data(), c.pd_bit, c.bits);
   }
   for (Object* obj : output_hooks_) {
-    obj->hooks.after_write(*obj, -1);
+    obj->hooks.after_write(*obj, ObjectHooks::kProcessData);
   }
 }
 
 void ProcessImage::read_inputs(std::span<uint8_t> sm3) {
   for (Object* obj : input_hooks_) {
-    obj->hooks.before_read(*obj, -1);
+    obj->hooks.before_read(*obj, ObjectHooks::kProcessData);
   }
   std::memset(sm3.data(), 0, std::min(sm3.size(), input_bytes()));
   const size_t avail = sm3.size() * 8;

@@ -32,13 +32,14 @@ class ProcessImage {
 
   // Rebuilds both directions. On an invalid configuration returns its abort code (the same
   // code the validators give) and keeps the previous compilation.
-  AbortCode compile();
+  // `failed` (optional) names the direction whose configuration is invalid.
+  AbortCode compile(PdoDirection* failed = nullptr);
 
-  // SM2 (outputs) -> mapped objects, then after_write(obj, -1) on every mapped object with
-  // that hook. A shorter buffer copies the entries that fit.
+  // SM2 (outputs) -> mapped objects, then after_write(obj, ObjectHooks::kProcessData) on every
+  // mapped object with that hook. A shorter buffer copies the entries that fit.
   void write_outputs(std::span<const uint8_t> sm2);
-  // before_read(obj, -1) on every mapped object with that hook, then objects -> SM3 (inputs);
-  // padding and unmapped bits read as 0.
+  // before_read(obj, ObjectHooks::kProcessData) on every mapped object with that hook, then
+  // objects -> SM3 (inputs); padding and unmapped bits read as 0.
   void read_inputs(std::span<uint8_t> sm3);
 
   size_t output_bytes() const { return (output_bits_ + 7) / 8; }

@@ -28,6 +28,10 @@ uint16_t object_data_type(const Object& obj) {
     if (const Entry* e = obj.entry(1)) {
       return e->data_type;
     }
+  } else {
+    // A RECORD without a standard structure of its own is the generic RECORD type (0x002A);
+    // data type 0 is "unknown" to masters.
+    return record_type::kRecord;
   }
   return 0;
 }
@@ -186,6 +190,21 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
       // one subindex up to MaxSub has no description. SDO upload/download of a padding
       // subindex still aborts with 0x06090011.
       const Entry* e = obj->entry(data[2]);
+      if (!e && data[2] <= obj->max_subindex()) {
+        // A gap below MaxSubindex (0x1C32/0x1C33 subindices 0x0D..0x1F) is described like a
+        // padding entry, with no data type, no bits and no access, so a master reading every
+        // subindex up to MaxSubindex gets a clean listing.
+        static const Entry kGap = [] {
+          Entry g;
+          g.name = "Reserved";
+          g.padding = true;
+          return g;
+        }();
+        Entry gap = kGap;
+        gap.subindex = data[2];
+        return start_fragments(reply, InfoKind::Buffer, sdo_info::kGetEntryDescriptionResponse,
+                               describe_entry(*obj, gap, data[3]), fragment);
+      }
       if (!e) {
         return info_error(reply, AbortCode::SubindexNotFound);
       }

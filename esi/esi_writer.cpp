@@ -71,6 +71,15 @@ void text_child(pugi::xml_node parent, const char* name, const std::string& text
   parent.append_child(name).text().set(text.c_str());
 }
 
+// The basic type an enumeration of `bits` bits is carried in: BITn below a byte, else the
+// unsigned integer of that size.
+std::string enum_base_type(uint16_t bits) {
+  if (bits < 8) return fmt::format("BIT{}", bits);
+  if (bits == 8) return "USINT";
+  if (bits == 16) return "UINT";
+  return "UDINT";
+}
+
 bool is_readable(uint16_t access) {
   return (access & coe::access::kReadAll) != 0;
 }
@@ -86,7 +95,11 @@ class DictionaryWriter {
   }
 
   void write_all() {
-    od_.for_each([&](const coe::Object& obj) { write_object(obj); });
+    // Enumeration objects (0x0800..0x0FFF) are data types: the ESI carries them once, as the
+    // DataType with EnumInfo their users declare, not as Objects.
+    od_.for_each([&](const coe::Object& obj) {
+      if (!coe::is_enum_type(obj.index())) write_object(obj);
+    });
   }
 
  private:
@@ -97,8 +110,11 @@ class DictionaryWriter {
     auto dt = types_.append_child("DataType");
     if (coe::is_enum_type(e.data_type)) {
       const auto* en = od_.find_enum(e.data_type);
+      const uint16_t bits = en ? en->bit_size : e.bit_length;
       text_child(dt, "Name", name);
-      dt.append_child("BitSize").text().set(en ? en->bit_size : e.bit_length);
+      // ETG.2000 §5.4.3 DataType/BaseType: the basic type the enumeration values are of.
+      text_child(dt, "BaseType", enum_base_type(bits));
+      dt.append_child("BitSize").text().set(bits);
       if (en) {
         for (const auto& v : en->values) {
           auto info = dt.append_child("EnumInfo");
@@ -205,7 +221,7 @@ class DictionaryWriter {
       ai.append_child("LBound").text().set(1);
       ai.append_child("Elements").text().set(n);
       declared_.insert(arr_name);
-      write_subitem(dt, sub0, "SubIndex 000", declare_entry_type(sub0));
+      write_subitem(dt, sub0, sub0.name, declare_entry_type(sub0));
       auto elems = dt.append_child("SubItem");
       text_child(elems, "Name", "Elements");
       text_child(elems, "Type", arr_name);
@@ -225,8 +241,8 @@ class DictionaryWriter {
     } else {
       std::set<std::string> names;
       for (const auto& e : es) {
-        if (e.padding) continue;  // a layout gap, not an addressable subindex
-        std::string name = e.subindex == 0 ? "SubIndex 000" : e.name;
+        if (e.padding) continue;    // a layout gap, not an addressable subindex
+        std::string name = e.name;  // the name SDO Information gives, subindex 0 included
         if (name.empty() || !names.insert(name).second) {
           name = fmt::format("{} (SubIndex {:03d})", e.name.empty() ? "Entry" : e.name, e.subindex);
           names.insert(name);

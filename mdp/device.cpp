@@ -26,6 +26,7 @@
 #include "mdp/parameter_store.hpp"
 #include "mdp/parameter_writer.hpp"
 #include "mdp/state_directory.hpp"
+#include "mdp/sync_manager_layout.hpp"
 
 namespace rackcat::mdp {
 
@@ -48,6 +49,8 @@ namespace {
 // ETG.1000.6 / ETG.5001.1: AL status code "invalid configuration" family; 0x0070 = module ident
 // list mismatch (the configured 0xF030 differs from the detected 0xF050).
 constexpr uint16_t kAlModuleIdentMismatch = 0x0070;
+constexpr uint16_t kAlInvalidOutputConfig = 0x001D;
+constexpr uint16_t kAlInvalidInputConfig = 0x001E;
 
 // Seconds of a "YYYY-MM-DD HH:MM:SS" text (UTC), already validated.
 int64_t parse_clock(std::string_view s) {
@@ -424,7 +427,9 @@ void Device::Impl::install_hooks() {
     };
   }
   // 0x1C12/0x1C13: a new assignment recompiles the process image (mailbox path, PREOP only).
-  for (uint16_t index : {uint16_t{0x1C12}, uint16_t{0x1C13}}) {
+  // The user PDOs likewise: a new mapping of an assigned PDO changes the SM2/SM3 sizes the ESM
+  // checks on PREOP->SAFEOP.
+  for (uint16_t index : {uint16_t{0x1C12}, uint16_t{0x1C13}, sm::kUserRxPdo, sm::kUserTxPdo}) {
     od.find(index)->hooks.after_write = [this](Object&, int) { image->compile(); };
   }
   // 0x1C32/0x1C33: counters from the cyclic path; Get Cycle Time = 2 resets them.
@@ -627,9 +632,14 @@ uint64_t Device::diagnosis_time(bool& local) const {
 
 uint16_t Device::request_state(EsmState from, EsmState to) {
   const bool entering_safeop = to == EsmState::SafeOp || to == EsmState::Op;
-  if (entering_safeop && (from == EsmState::PreOp || from == EsmState::Init) &&
-      module_lists_mismatch(impl_->od)) {
-    return kAlModuleIdentMismatch;
+  if (entering_safeop && (from == EsmState::PreOp || from == EsmState::Init)) {
+    if (module_lists_mismatch(impl_->od)) return kAlModuleIdentMismatch;
+    // The PDO configuration the master left in PREOP must compile (ETG.1000.6 Table 11:
+    // 0x001D invalid output configuration, 0x001E invalid input configuration).
+    coe::PdoDirection failed = coe::PdoDirection::Rx;
+    if (impl_->image->compile(&failed) != AbortCode::None) {
+      return failed == coe::PdoDirection::Rx ? kAlInvalidOutputConfig : kAlInvalidInputConfig;
+    }
   }
   return 0;
 }

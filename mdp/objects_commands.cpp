@@ -23,7 +23,7 @@ using coe::AbortCode;
 Object command(uint16_t index, const char* name, uint16_t command_bytes,
                std::span<const uint8_t> command_default, uint16_t response_bytes,
                AbortCode (*check)(std::span<const uint8_t>)) {
-  Object o(index, ObjectCode::Record, name, 0);
+  Object o(index, ObjectCode::Record, name, coe::record_type::kCommandPar);
   o.add(sub0(3));
   o.add(octets(1, "Command", command_bytes, acc("rw"), command_default));
   o.add(num(2, "Status", DataType::Unsigned8, acc("ro"), 0));

@@ -24,7 +24,7 @@ Object mapping_object(const Module& m, const IoLayout& layout) {
   const uint16_t pdo = layout.output ? sm::rx_pdo_index(m.number) : sm::tx_pdo_index(m.number);
   const uint16_t target =
       m.index(layout.output ? 0x7000 : 0x6000, static_cast<uint8_t>(layout.kind));
-  Object o(pdo, ObjectCode::Record, std::string(layout.pdo_name), 0);
+  Object o(pdo, ObjectCode::Record, std::string(layout.pdo_name), coe::record_type::kPdoMapping);
   const uint8_t count = static_cast<uint8_t>(layout.entries + (layout.pad_bits ? 1 : 0));
   o.add(sub0(count));
   for (uint8_t s = 1; s <= layout.entries; ++s) {
@@ -37,6 +37,70 @@ Object mapping_object(const Module& m, const IoLayout& layout) {
               layout.pad_bits));
   }
   o.finalize();
+  return o;
+}
+
+// The other PDOs assigned in the direction of mapping object `pdo`, in bits (0 when `pdo` is not
+// assigned: its length then only matters once it is, and 0x1C12/0x1C13 check that).
+uint32_t other_assigned_bits(const coe::ObjectDictionary& od, uint16_t pdo, coe::PdoDirection dir,
+                             bool& assigned) {
+  assigned = false;
+  const coe::Object* assign = od.find(dir == coe::PdoDirection::Rx ? 0x1C12 : 0x1C13);
+  if (!assign) return 0;
+  uint32_t bits = 0;
+  for (uint8_t i = 1; i <= assign->sub0() && i <= assign->max_subindex(); ++i) {
+    const auto index = static_cast<uint16_t>(assign->get_u(i));
+    if (index == pdo) {
+      assigned = true;
+      continue;
+    }
+    if (const coe::Object* m = od.find(index)) {
+      AbortCode rc;
+      bits += static_cast<uint32_t>(coe::mapping_bits(od, *m, dir, rc));
+    }
+  }
+  return bits;
+}
+
+// A user PDO (sync_manager_layout.hpp): subindex 0 and the entries writable in PREOP, checked by
+// coe's mapping rules (0x06010003 entries change only while subindex 0 is 0, 0x06020000 /
+// 0x06090011 no such object / subindex, 0x06040041 not mappable in this direction, 0x06040043
+// length differs from the entry's, 0x06040042 longer than the SyncManager takes) and, while the
+// PDO is assigned, the whole assignment's length (0x06040042).
+Object user_pdo(coe::ObjectDictionary& od, bool rx) {
+  const uint16_t index = rx ? sm::kUserRxPdo : sm::kUserTxPdo;
+  const auto dir = rx ? coe::PdoDirection::Rx : coe::PdoDirection::Tx;
+  Object o(index, ObjectCode::Record, rx ? "User RxPDO" : "User TxPDO",
+           coe::record_type::kPdoMapping);
+  o.add(sub0(0, acc("ro,wr_preop")));
+  for (uint8_t s = 1; s <= sm::kUserPdoEntries; ++s) {
+    o.add(num(s, "SubIndex " + std::string(s < 10 ? "00" : "0") + std::to_string(s),
+              DataType::Unsigned32, acc("ro,wr_preop"), 0));
+  }
+  o.finalize();
+  auto checks = coe::pdo_mapping_validator(od, dir, sm::kMaxProcessDataBytes);
+  o.hooks.validate_write = [checks, &od, index, dir](const Object& obj, int subindex,
+                                                     std::span<const uint8_t> data,
+                                                     coe::EsmState state) {
+    if (AbortCode rc = checks(obj, subindex, data, state); rc != AbortCode::None) return rc;
+    // Only subindex 0 (or a complete write) brings entries into use.
+    if (subindex >= 1) return AbortCode::None;
+    bool assigned = false;
+    const uint32_t others = other_assigned_bits(od, index, dir, assigned);
+    if (!assigned) return AbortCode::None;
+    const uint8_t n = data.empty() ? 0 : data[0];
+    uint32_t bits = 0;
+    for (uint8_t i = 1; i <= n && i <= obj.max_subindex(); ++i) {
+      const coe::Entry* e = obj.entry(i);
+      const size_t at = e->bit_offset / 8;
+      const uint32_t v = subindex == -1 && at + 4 <= data.size()
+                             ? coe::get_le32(data.data() + at)
+                             : static_cast<uint32_t>(obj.get_u(i));
+      bits += v & 0xFF;
+    }
+    return (others + bits + 7) / 8 > sm::kMaxProcessDataBytes ? AbortCode::PdoLengthExceeded
+                                                              : AbortCode::None;
+  };
   return o;
 }
 
@@ -109,7 +173,8 @@ Object assignment_object(const RackConfig& cfg, coe::ObjectDictionary& od, bool 
 
 Object sync_parameter_object(bool outputs) {
   Object o(outputs ? 0x1C32 : 0x1C33, ObjectCode::Record,
-           outputs ? "SM output parameter" : "SM input parameter", 0);
+           outputs ? "SM output parameter" : "SM input parameter",
+           coe::record_type::kSmSynchronisation);
   o.add(sub0(0x20));
   Entry type = num(0x01, "Synchronization Type", DataType::Unsigned16, acc("ro,wr_preop"),
                    outputs ? kSyncSmEvent : kSyncWithSm2);
@@ -159,7 +224,7 @@ void add_communication_objects(const RackConfig& cfg, coe::ObjectDictionary& od)
   od.add(var(0x100B, "Manufacturer FW Bootloader Version",
              str(0, "Manufacturer FW Bootloader Version", 6, acc("ro"), cm.bootloader_version)));
 
-  Object id(0x1018, ObjectCode::Record, "Identity", 0);
+  Object id(0x1018, ObjectCode::Record, "Identity", coe::record_type::kIdentity);
   id.add(sub0(4));
   id.add(num(1, "Vendor ID", DataType::Unsigned32, acc("ro"), cm.vendor_id));
   id.add(num(2, "Product code", DataType::Unsigned32, acc("ro"), cm.product_code));
@@ -170,9 +235,11 @@ void add_communication_objects(const RackConfig& cfg, coe::ObjectDictionary& od)
   for (const auto& m : cfg.modules) {
     if (m.card->output) od.add(mapping_object(m, *io_layout(*m.card->output, true)));
   }
+  od.add(user_pdo(od, true));
   for (const auto& m : cfg.modules) {
     if (m.card->input) od.add(mapping_object(m, *io_layout(*m.card->input, false)));
   }
+  od.add(user_pdo(od, false));
 
   Object smt(0x1C00, ObjectCode::Array, "Sync manager type",
              static_cast<uint16_t>(DataType::Unsigned8));

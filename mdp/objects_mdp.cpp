@@ -56,7 +56,8 @@ bool module_lists_mismatch(const coe::ObjectDictionary& od) {
 }
 
 void add_mdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
-  Object mdp(0xF000, ObjectCode::Record, "Modular Device Profile", 0);
+  Object mdp(0xF000, ObjectCode::Record, "Modular Device Profile",
+             coe::record_type::kModularDeviceProfile);
   mdp.add(sub0(2));
   mdp.add(num(1, "Index distance", DataType::Unsigned16, acc("ro") | kTx, kIndexDistance));
   mdp.add(num(2, "Maximum number of modules", DataType::Unsigned16, acc("ro") | kTx, kMaxModules));
@@ -64,7 +65,8 @@ void add_mdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
 
   // Command bytes: the guide gives the size (ARRAY [0..3] OF BYTE) but no sequence; rackcat uses
   // "scan" (0x73 0x63 0x61 0x6E) in the style of 0xFBF2's "save". Other bytes: 0x06040043.
-  Object detect(0xF002, ObjectCode::Record, "Detect Modules Command", 0);
+  Object detect(0xF002, ObjectCode::Record, "Detect Modules Command",
+                coe::record_type::kCommandPar);
   detect.add(sub0(2));
   detect.add(octets(1, "Command", 4, acc("ro,wr_preop")));
   detect.add(num(2, "Status", DataType::Unsigned8, acc("ro"), 0));

@@ -49,6 +49,24 @@ constexpr UartField kUartFields[] = {
     {"Data Bits", 0x0803, 2, 3}, {"Stop Bits", 0x0802, 1, 0}, {"Flow Control", 0x0805, 2, 0},
 };
 
+// The enumeration as an object of the data type area (ETG.1000.6 §5.6.7.4.4, indices
+// 0x0800..0x0FFF; structure ENUM 0x0028): subindex 0 the number of values, subindex k one value as
+// OCTET_STRING: the value as 32-bit little-endian integer followed by its text (no terminator).
+// The entry's name is the text too, so SDO Information lists it readably.
+Object enum_object(const EnumSpec& spec) {
+  Object o(spec.index, ObjectCode::Record, spec.name, coe::record_type::kEnum);
+  o.add(sub0(static_cast<uint8_t>(spec.values.size())));
+  for (size_t i = 0; i < spec.values.size(); ++i) {
+    const std::string_view text = spec.values[i];
+    std::vector<uint8_t> value = le_bytes(i, 4);
+    value.insert(value.end(), text.begin(), text.end());
+    o.add(octets(static_cast<uint8_t>(i + 1), std::string(text),
+                 static_cast<uint16_t>(value.size()), acc("ro"), value));
+  }
+  o.finalize();
+  return o;
+}
+
 Object uart_config(const Module& m) {
   Object o(m.index(0x5000, 5), ObjectCode::Record, "UART Config", 0);
   o.set_packed(true);
@@ -135,6 +153,7 @@ void add_tc_uart_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
       t.values.push_back({static_cast<int64_t>(i), spec.values[i]});
     }
     od.add_enum(std::move(t));
+    od.add(enum_object(spec));
   }
 }
 

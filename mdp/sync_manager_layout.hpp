@@ -57,4 +57,12 @@ constexpr uint16_t tx_pdo_index(uint16_t module_number) {
   return static_cast<uint16_t>(kTxPdoBase + (module_number - 1) * kPdoIndexIncrement);
 }
 
+// User PDOs (guide §2.6/§4.8: the thermocouple ohms and 0x2000:0F are "user-PDO mappable",
+// "mapped in by the EtherCAT operator"; Appendix A flags further TX/RX entries): one RxPDO and
+// one TxPDO after the module range, empty and unassigned by default, whose mapping the master
+// writes in PREOP (ETG.1000.6 §5.6.7.4.8) and then adds to 0x1C12/0x1C13.
+inline constexpr uint16_t kUserRxPdo = 0x1700;
+inline constexpr uint16_t kUserTxPdo = 0x1B00;
+inline constexpr uint8_t kUserPdoEntries = 32;
+
 }  // namespace rackcat::mdp::sm

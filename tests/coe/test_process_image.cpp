@@ -42,7 +42,7 @@ TEST_F(ProcessImageTest, InputsFollowTheTxMappingWithBitsAndPadding) {
 TEST_F(ProcessImageTest, HooksRunOncePerCycle) {
   int reads = 0, writes = 0;
   od.find(0x6000)->hooks.before_read = [&](Object& o, int sub) {
-    EXPECT_EQ(sub, -1);
+    EXPECT_EQ(sub, ObjectHooks::kProcessData);
     o.set_u(4, 0x0102);
     ++reads;
   };
