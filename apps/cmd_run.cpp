@@ -12,10 +12,15 @@
 // bad configuration is one line "FILE:LINE: problem" and exit 2 (a bad channel source is
 // found once the racks are built, after the interface is opened); a missing interface or
 // permission is one line and exit 2.
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <stop_token>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <spdlog/spdlog.h>
@@ -178,6 +183,21 @@ int run(const RunArgs& a) {
     }
     spdlog::info("rackcat: RIMs on CAN interface {}", a.rim_bus.substr(4));
   }
+  // The racks' own clock (guide §4.8: 0x2000:0F every 30 s in every ESM state, with or without
+  // process data): once a second on the loop thread.
+  std::jthread clock_thread([&runner, &racks](const std::stop_token& stop) {
+    std::mutex m;
+    std::condition_variable_any cv;
+    std::unique_lock lock(m);
+    while (!stop.stop_requested()) {
+      cv.wait_for(lock, stop, std::chrono::seconds(1), [] { return false; });
+      if (stop.stop_requested()) break;
+      runner.loop().post([&racks] {
+        for (auto& r : racks) r->rack().on_clock();
+      });
+    }
+  });
+  std::fflush(stdout);
   if (!a.pcap.empty()) spdlog::info("rackcat: capturing to {}", a.pcap);
 
   const int rc = runner.run(segment);

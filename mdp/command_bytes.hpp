@@ -32,5 +32,8 @@ inline constexpr uint8_t kStatusDoneNoResponse = 0;
 inline constexpr uint8_t kStatusDoneWithResponse = 1;
 inline constexpr uint8_t kStatusError = 2;
 inline constexpr uint8_t kStatusExecuting = 255;
+// 0xF002:02 (guide Appendix A): 0 only before the first command; 100..200 the progress in
+// percent plus 100, so a completed scan reads 200.
+inline constexpr uint8_t kStatusScanComplete = 200;
 
 }  // namespace rackcat::mdp::cmd

@@ -451,10 +451,6 @@ void Device::Impl::install_hooks() {
                                            std::chrono::steady_clock::now() - power_on)
                                            .count()));
   };
-  od.find(0xF6F0)->hooks.before_read = [this](Object& obj, int) {
-    const uint32_t now = uptime_us();
-    for (uint8_t s = 1; s <= obj.sub0(); ++s) obj.set_u(s, now);
-  };
 
   // 0xF002 Detect Modules: the detected list becomes the configured rack, then drivers remove
   // what is offline (modules/, Detect Modules Override).
@@ -468,7 +464,7 @@ void Device::Impl::install_hooks() {
       }
     }
     notify([&](CycleListener& l) { l.on_detect_modules(*self); });
-    obj.set_u(2, cmd::kStatusDoneNoResponse);
+    obj.set_u(2, cmd::kStatusScanComplete);
     restore_command(obj);
   };
 

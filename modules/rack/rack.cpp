@@ -145,6 +145,21 @@ Rack::Rack(mdp::Device& device, RackOptions options)
     }
   }
 
+  // A mask write re-evaluates the whole tree at once (guide §3.4: 0xF3A1..0xF3A8 select what
+  // 0xF380 summarises; the event masks 0x2000:09 / 0x2rr1:07 what 0xF386/0xF388 count).
+  auto remask = [this](coe::Object* o) {
+    if (o == nullptr) return;
+    auto previous = o->hooks.after_write;
+    o->hooks.after_write = [this, previous](coe::Object& obj, int sub) {
+      if (previous) previous(obj, sub);
+      tree_.update();
+      dirty_ = false;
+    };
+  };
+  for (uint16_t index = 0xF3A1; index <= 0xF3A8; ++index) remask(od.find(index));
+  remask(od.find(0x2000));
+  for (const mdp::Rim& r : cfg.rims) remask(od.find(mdp::rim_info_index(r.number)));
+
   t0_ = last_t_ = plant_t_ = now();
   publish_fans();
   publish_cpu_temperature();
@@ -228,6 +243,14 @@ void Rack::before_inputs(mdp::Device&) {
   }
 }
 
+void Rack::on_clock() {
+  if (now() >= cpu_next_publish_) publish_cpu_temperature();
+  if (dirty_) {
+    tree_.update();
+    dirty_ = false;
+  }
+}
+
 void Rack::evaluate_faults() {
   bool unsafe_in_rim[6] = {};
   for (size_t i = 0; i < drivers_.size(); ++i) {
@@ -244,11 +267,13 @@ void Rack::evaluate_faults() {
     }
   }
   // An unsafe wiring fault takes its RIM out of ONLINE (guide Table 23): the RIM drives its
-  // outputs to the TÜV-safe level; it returns when the fault is gone.
+  // outputs to the TÜV-safe level; it returns when the fault is gone. An ERROR state set for
+  // another reason (guide Table 16 state 3, `rackcat ctl rim-state`) is not the fault's to end.
   for (auto& [rr, rim] : rims_) {
     if (unsafe_in_rim[rr] && rim.state == RimState::Online) {
       set_rim_state(rr, RimState::Error, rim.comm_error);
-    } else if (!unsafe_in_rim[rr] && rim.state == RimState::Error) {
+      rim.fault_error = true;
+    } else if (!unsafe_in_rim[rr] && rim.state == RimState::Error && rim.fault_error) {
       set_rim_state(rr, RimState::Online, false);
     }
   }
@@ -377,6 +402,7 @@ void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
                      .code = comm_error ? uint16_t{1} : uint16_t{0}});
   }
   rim.comm_error = comm_error;
+  rim.fault_error = false;
   tree_.set_rim_state(rr, state, comm_error);
   for (uint16_t n : rim.modules) {
     CardDriver& d = *drivers_[n - 1];

@@ -71,6 +71,7 @@ struct RimStatus {
   double power_supply_rpm = 0.0;
   double slot_card_rpm = 0.0;
   uint32_t mcm_errors = 0;        // active 0x2rr1:08 bits 16..19 (SLOT machine / SOUT compare)
+  bool fault_error = false;       // ERROR because of an unsafe wiring fault (ends with it)
   std::vector<uint16_t> modules;  // module numbers in this RIM
 };
 
@@ -94,6 +95,10 @@ class Rack : public mdp::CycleListener {
   // --- CycleListener (device thread).
   void on_outputs(mdp::Device&) override;
   void before_inputs(mdp::Device&) override;
+  // The device's own clock, independent of process data (call about once a second on the
+  // device thread, in every ESM state): the 30 s CPU temperature reading (guide §4.8) and any
+  // pending exception-tree update.
+  void on_clock();
   void on_state_changed(mdp::Device&, coe::EsmState from, coe::EsmState to) override;
   void on_watchdog_expired(mdp::Device&) override;
   void on_exception_reset(mdp::Device&) override;

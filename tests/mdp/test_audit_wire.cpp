@@ -4,7 +4,9 @@
 // the description of gaps below MaxSubindex.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
+#include <thread>
 
 #include "mdp/device.hpp"
 #include "sdo_client.hpp"
@@ -147,6 +149,27 @@ TEST_F(AuditWire, GapsBelowMaxSubindexAreDescribedLikePadding) {
     std::vector<uint8_t> v;
     EXPECT_EQ(sdo->upload(index, 0x10, v), 0x06090011u);
   }
+}
+
+// Guide Appendix A 0xF002:02: "0: default value if the command has not been initiated. Not a
+// supported value otherwise"; 100..200 give the progress, 200 = 100 %.
+TEST_F(AuditWire, DetectModulesStatusReadsTwoHundredAfterACompletedScan) {
+  EXPECT_EQ(sdo->read_u(0xF002, 2), 0u);
+  ASSERT_EQ(sdo->download(0xF002, 1, std::vector<uint8_t>{0x73, 0x63, 0x61, 0x6E}), 0u);
+  EXPECT_EQ(sdo->read_u(0xF002, 2), 200u);
+}
+
+// 0xF6F0 "Input Latch Local Timestamp" is the time the inputs were latched, not of the read.
+TEST_F(AuditWire, InputLatchTimestampIsTheTimeOfTheLatch) {
+  device->state_changed(EsmState::PreOp, EsmState::SafeOp);
+  std::vector<uint8_t> sm3(device->input_bytes());
+  std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  device->read_inputs(sm3);
+  const uint64_t latched = device->dictionary().find(0xF6F0)->get_u(1);
+  EXPECT_GT(latched, 0u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  EXPECT_EQ(sdo->read_u(0xF6F0, 1), latched);
+  EXPECT_EQ(sdo->read_u(0xF6F0, 1), latched);
 }
 
 }  // namespace

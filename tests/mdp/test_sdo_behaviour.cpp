@@ -199,7 +199,7 @@ TEST_F(SdoBehaviour, ConfiguredModuleListMustMatchTheDetectedOne) {
 TEST_F(SdoBehaviour, DetectModulesCommandNeedsItsByteSequence) {
   EXPECT_EQ(sdo->download(0xF002, 1, std::vector<uint8_t>{1, 2, 3, 4}), kIncompatible);
   EXPECT_EQ(sdo->download(0xF002, 1, std::vector<uint8_t>{0x73, 0x63, 0x61, 0x6E}), 0u);
-  EXPECT_EQ(sdo->read_u(0xF002, 2), 0u);
+  EXPECT_EQ(sdo->read_u(0xF002, 2), 200u);  // guide Appendix A: 200 = 100 % done
   EXPECT_EQ(sdo->read_u(0xF050, 0), device->modules().size());
 }
 
