@@ -46,7 +46,18 @@ struct PdoDescription {
   bool assigned = true;  // in 0x1C12/0x1C13 now (SII/ESI "default" PDO)
   bool fixed = false;    // mapping object not writable
   bool mandatory = false;
+  bool from_module = false;  // a slot's PDO: the ESI marks it OverwrittenByModule
   std::vector<PdoEntryDescription> entries;
+};
+
+// ESI Info/StateMachine/Timeout and Info/Mailbox/Timeout (ETG.2000 InfoType), milliseconds.
+struct TimeoutDescription {
+  int preop = 3000;           // INIT -> PREOP
+  int safeop_op = 10000;      // PREOP -> SAFEOP and SAFEOP -> OP
+  int back_to_init = 5000;    // any -> INIT
+  int back_to_safeop = 200;   // OP -> SAFEOP
+  int mailbox_request = 100;  // SM0 free for the next request
+  int mailbox_response = 2000;
 };
 
 // One synchronisation mode (ETG.2010 §2.9 DC category, ETG.2000 Dc/OpMode).
@@ -119,6 +130,7 @@ struct DeviceDescription {
   std::vector<PdoDescription> rx_pdos;  // all RxPDOs the device offers
   std::vector<PdoDescription> tx_pdos;
   std::vector<DcOpModeDescription> dc_modes;
+  TimeoutDescription timeouts;
 };
 
 }  // namespace rackcat::esi

@@ -107,13 +107,21 @@ class DictionaryWriter {
   std::string declare_entry_type(const coe::Entry& e) {
     std::string name = esi_type_name(od_, e);
     if (!declared_.insert(name).second) return name;
-    auto dt = types_.append_child("DataType");
     if (coe::is_enum_type(e.data_type)) {
       const auto* en = od_.find_enum(e.data_type);
       const uint16_t bits = en ? en->bit_size : e.bit_length;
+      // ETG.2000 §5.4.3 DataType/BaseType: the basic type the enumeration values are of, itself
+      // a declared DataType (the schema's BaseTypeRef key).
+      const std::string base = enum_base_type(bits);
+      if (declared_.insert(base).second) {
+        auto b = types_.append_child("DataType");
+        text_child(b, "Name", base);
+        const int base_bits = bits < 8 ? bits : bits == 8 ? 8 : bits == 16 ? 16 : 32;
+        b.append_child("BitSize").text().set(base_bits);
+      }
+      auto dt = types_.append_child("DataType");
       text_child(dt, "Name", name);
-      // ETG.2000 §5.4.3 DataType/BaseType: the basic type the enumeration values are of.
-      text_child(dt, "BaseType", enum_base_type(bits));
+      text_child(dt, "BaseType", base);
       dt.append_child("BitSize").text().set(bits);
       if (en) {
         for (const auto& v : en->values) {
@@ -123,6 +131,7 @@ class DictionaryWriter {
         }
       }
     } else {
+      auto dt = types_.append_child("DataType");
       text_child(dt, "Name", name);
       dt.append_child("BitSize").text().set(e.bit_length);
     }
@@ -309,6 +318,9 @@ void write_pdo(pugi::xml_node parent, const char* element, const PdoDescription&
                const coe::ObjectDictionary* od, bool depend_on_slot) {
   auto node = parent.append_child(element);
   if (p.fixed) node.append_attribute("Fixed").set_value(true);
+  // A slot's PDO at device level describes the default rack; a configurator that fills the
+  // slots replaces it with the module's own (ETG.2000 PdoType/@OverwrittenByModule).
+  if (p.from_module) node.append_attribute("OverwrittenByModule").set_value(true);
   if (p.mandatory) node.append_attribute("Mandatory").set_value(true);
   // Sm present = assigned by default (ETG.2000 PdoType/@Sm).
   if (p.assigned) node.append_attribute("Sm").set_value(p.sm);
@@ -453,6 +465,18 @@ std::string write_esi(const EsiContent& c) {
   type.append_attribute("ProductCode").set_value(esi_hex(d.product_code, 8).c_str());
   type.append_attribute("RevisionNo").set_value(esi_hex(d.revision, 8).c_str());
   text_child(device, "Name", d.device_name);
+  {
+    // ETG.2000 InfoType: the state-machine and mailbox timeouts a master should allow.
+    auto info = device.append_child("Info");
+    auto sm_timeout = info.append_child("StateMachine").append_child("Timeout");
+    sm_timeout.append_child("PreopTimeout").text().set(d.timeouts.preop);
+    sm_timeout.append_child("SafeopOpTimeout").text().set(d.timeouts.safeop_op);
+    sm_timeout.append_child("BackToInitTimeout").text().set(d.timeouts.back_to_init);
+    sm_timeout.append_child("BackToSafeopTimeout").text().set(d.timeouts.back_to_safeop);
+    auto mbx_timeout = info.append_child("Mailbox").append_child("Timeout");
+    mbx_timeout.append_child("RequestTimeout").text().set(d.timeouts.mailbox_request);
+    mbx_timeout.append_child("ResponseTimeout").text().set(d.timeouts.mailbox_response);
+  }
   text_child(device, "GroupType", d.group_type);
   auto device_profile = write_profile(device, "Profile", *c.dictionary, false);
   if (d.coe.diag_history && c.dictionary->find(coe::diag::kIndex)) {

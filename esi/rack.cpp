@@ -73,8 +73,24 @@ PdoDescription relocate_pdo(PdoDescription p, uint16_t pdo_index, uint16_t offse
 }  // namespace
 
 DeviceDescription describe_device(const mdp::Device& device) {
-  return describe_dictionary(device.dictionary(), rack_texts(device.config()),
-                             rack_sm_plan(device.config()));
+  DeviceDescription d = describe_dictionary(device.dictionary(), rack_texts(device.config()),
+                                            rack_sm_plan(device.config()));
+  // The slots' PDOs: module n at 0x1600/0x1A00 + n - 1 (docs/MDP.md PDO index rule); the user
+  // PDOs and the device's own (0x1BFF diagnosis) are not overwritten by a module.
+  for (auto* pdos : {&d.rx_pdos, &d.tx_pdos}) {
+    for (auto& p : *pdos) {
+      const auto slot = static_cast<uint32_t>(p.index & 0xFF);
+      p.from_module = slot < mdp::kMaxModules && (p.index >> 8 == 0x16 || p.index >> 8 == 0x1A);
+    }
+  }
+  // Sized for the rack: a master's PREOP->SAFEOP of a full rack reads and checks the mapping of
+  // every module (two PDOs and the 0x1C12/0x1C13 entries each by SDO), so 50 ms per module on
+  // top of the usual 10 s; the SDO Information answers of a large dictionary travel in many
+  // fragments, 20 ms per module on top of 2 s.
+  const auto modules = static_cast<int>(device.modules().size());
+  d.timeouts.safeop_op = 10000 + 50 * modules;
+  d.timeouts.mailbox_response = 2000 + 20 * modules;
+  return d;
 }
 
 SiiImage build_sii(const mdp::Device& device) {
@@ -98,6 +114,23 @@ std::vector<const mdp::CardType*> representatives(std::map<uint32_t, std::string
       it->second += ", " + std::string(card.name);
   }
   return out;
+}
+
+// A module's name true for every card of its ident: the card's own description when it has
+// the ident alone, otherwise the card names and what they share ("CDI-12/CDI-11/CDI-10
+// 16-channel digital input").
+std::string module_name(const mdp::CardType& card, const std::string& type_list) {
+  if (type_list.find(',') == std::string::npos) return std::string(card.slot_card_type);
+  std::string names;
+  for (const char c : type_list) {
+    if (c == ' ') continue;  // card names have no blanks; the list separator is ", "
+    names.push_back(c == ',' ? '/' : c);
+  }
+  // Guide Table 5 ident, bits 15..12: 0xD digital, 0xA analog, 0xC temperature/serial.
+  const uint32_t family = (card.module_ident >> 12) & 0xF;
+  const char* kind = family == 0xD ? "digital" : family == 0xA ? "analog" : "thermocouple";
+  return fmt::format("{} {}-channel {} {}", names, card.channels, kind,
+                     card.input ? "input" : "output");
 }
 
 }  // namespace
@@ -128,7 +161,7 @@ std::vector<ModuleDescription> describe_module_types() {
     ModuleDescription md;
     md.ident = m.card->module_ident;
     md.type = names[md.ident];
-    md.name = std::string(m.card->slot_card_type);
+    md.name = module_name(*m.card, md.type);
     const uint16_t nn = m.nn();
     const auto offset = static_cast<uint16_t>(nn * mdp::kIndexDistance);
     for (const auto& [index, en] : od.enums()) md.dictionary.add_enum(en);

@@ -39,14 +39,8 @@ inline std::vector<uint8_t> le_bytes(uint64_t value, size_t n) {
 
 // An integer/bit entry with a default value.
 inline Entry num(uint8_t sub, std::string name, DataType type, uint16_t access, uint64_t def = 0) {
-  Entry e;
-  e.subindex = sub;
-  e.name = std::move(name);
-  e.data_type = static_cast<uint16_t>(type);
-  e.bit_length = coe::fixed_bit_size(type).value_or(0);
-  e.access = access;
-  e.default_value = le_bytes(def, (e.bit_length + 7) / 8);
-  return e;
+  const uint16_t bits = coe::fixed_bit_size(type).value_or(0);
+  return coe::make_entry(sub, std::move(name), type, bits, access, le_bytes(def, (bits + 7) / 8));
 }
 
 // An integer entry limited to [lo, hi] (SDO writes outside answer 0x06090031/32).
@@ -61,14 +55,8 @@ inline Entry ranged(uint8_t sub, std::string name, DataType type, uint16_t acces
 // An entry of a device enumeration type (0x0800..), `bits` wide.
 inline Entry enum_entry(uint8_t sub, std::string name, uint16_t enum_index, uint16_t bits,
                         uint16_t access, uint64_t def) {
-  Entry e;
-  e.subindex = sub;
-  e.name = std::move(name);
-  e.data_type = enum_index;
-  e.bit_length = bits;
-  e.access = access;
-  e.default_value = le_bytes(def, (bits + 7) / 8);
-  return e;
+  return coe::make_entry(sub, std::move(name), static_cast<DataType>(enum_index), bits, access,
+                         le_bytes(def, (bits + 7) / 8));
 }
 
 inline Entry real(uint8_t sub, std::string name, uint16_t access, float def = 0.0f) {
@@ -83,40 +71,25 @@ inline Entry real(uint8_t sub, std::string name, uint16_t access, float def = 0.
 // VISIBLE_STRING(chars): fixed size on the wire, shorter text padded with NUL.
 inline Entry str(uint8_t sub, std::string name, uint16_t chars, uint16_t access,
                  std::string_view def = {}) {
-  Entry e;
-  e.subindex = sub;
-  e.name = std::move(name);
-  e.data_type = static_cast<uint16_t>(DataType::VisibleString);
-  e.bit_length = static_cast<uint16_t>(chars * 8);
-  e.access = access;
-  e.default_value.assign(chars, 0);
-  for (size_t i = 0; i < def.size() && i < chars; ++i)
-    e.default_value[i] = static_cast<uint8_t>(def[i]);
-  return e;
+  std::vector<uint8_t> value(chars, 0);
+  for (size_t i = 0; i < def.size() && i < chars; ++i) value[i] = static_cast<uint8_t>(def[i]);
+  return coe::make_entry(sub, std::move(name), DataType::VisibleString,
+                         static_cast<uint16_t>(chars * 8), access, std::move(value));
 }
 
 // OCTET_STRING(bytes): the guide's "ARRAY [0..n] OF BYTE" command entries and sample arrays.
 inline Entry octets(uint8_t sub, std::string name, uint16_t bytes, uint16_t access,
                     std::span<const uint8_t> def = {}) {
-  Entry e;
-  e.subindex = sub;
-  e.name = std::move(name);
-  e.data_type = static_cast<uint16_t>(DataType::OctetString);
-  e.bit_length = static_cast<uint16_t>(bytes * 8);
-  e.access = access;
-  e.default_value.assign(bytes, 0);
-  for (size_t i = 0; i < def.size() && i < bytes; ++i) e.default_value[i] = def[i];
-  return e;
+  std::vector<uint8_t> value(bytes, 0);
+  for (size_t i = 0; i < def.size() && i < bytes; ++i) value[i] = def[i];
+  return coe::make_entry(sub, std::move(name), DataType::OctetString,
+                         static_cast<uint16_t>(bytes * 8), access, std::move(value));
 }
 
 // A gap of `bits` bits (the guide's pad_3 / pad_15 / Pad_4 rows): takes its place in the
 // layout, answers SDO access with "subindex does not exist".
 inline Entry pad(uint8_t sub, uint16_t bits) {
-  Entry e;
-  e.subindex = sub;
-  e.name = "Padding";
-  e.data_type = 0;
-  e.bit_length = bits;
+  Entry e = coe::make_entry(sub, "Padding", DataType{}, bits, 0);
   e.padding = true;
   return e;
 }

@@ -79,6 +79,46 @@ TEST_P(RackEsi, DiagMessagesCarryEveryTextOfTheHistory) {
   }
 }
 
+// What a configurator reads (compared with vendor modular devices): slot PDOs at device level
+// marked OverwrittenByModule, the user PDOs editable, <Info> timeouts that grow with the rack,
+// enumerations with a BaseType, and a module name true for every card that shares its ident.
+TEST_P(RackEsi, ConfiguratorsSeeOverwritableSlotPdosTimeoutsEnumsAndSharedModuleNames) {
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_string(write_esi(*device).c_str()));
+  auto dev = doc.select_node("/EtherCATInfo/Descriptions/Devices/Device").node();
+  size_t user = 0;
+  for (const char* element : {"RxPdo", "TxPdo"}) {
+    for (auto p : dev.children(element)) {
+      const auto index = std::stoul(p.child_value("Index") + 2, nullptr, 16);
+      const bool is_user = index == mdp::sm::kUserRxPdo || index == mdp::sm::kUserTxPdo;
+      const bool slot =
+          (index >= 0x1600 && index <= 0x16FE) || (index >= 0x1A00 && index <= 0x1AFE);
+      user += is_user;
+      EXPECT_EQ(p.attribute("OverwrittenByModule").as_bool(), slot) << index;
+      if (is_user || slot) EXPECT_EQ(p.attribute("Fixed").as_bool(), slot) << index;
+    }
+  }
+  EXPECT_EQ(user, 2u);
+  auto timeout = dev.child("Info").child("StateMachine").child("Timeout");
+  const int modules = static_cast<int>(device->modules().size());
+  EXPECT_EQ(timeout.child("SafeopOpTimeout").text().as_int(), 10000 + 50 * modules);
+  EXPECT_GE(
+      dev.child("Info").child("Mailbox").child("Timeout").child("ResponseTimeout").text().as_int(),
+      2000);
+  // Enumeration types: BaseType before BitSize, never an Object of their own.
+  auto baud = doc.select_node("//DataType[Name='DT0800EN04']").node();
+  ASSERT_TRUE(baud);
+  EXPECT_STREQ(baud.child_value("BaseType"), "BIT4");
+  EXPECT_FALSE(doc.select_node("//Device/Profile/Dictionary/Objects/Object[Index='#x0800']"));
+  // 0x0064D116 is CDI-10, CDI-11 and CDI-12 (guide Table 5).
+  auto din16 = doc.select_node("//Modules/Module[Type/@ModuleIdent='#x0064D116']/Name").node();
+  ASSERT_TRUE(din16);
+  const std::string name = din16.child_value();
+  for (const char* card : {"CDI-10", "CDI-11", "CDI-12"})
+    EXPECT_NE(name.find(card), std::string::npos) << name;
+  EXPECT_EQ(name.find("Inverted"), std::string::npos) << name;
+}
+
 TEST_P(RackEsi, SiiIdentityEqualsIdentityObjectAndEsiType) {
   auto info = parse_sii(build_sii(*device).span());
   const auto* identity = device->dictionary().find(0x1018);
