@@ -95,7 +95,9 @@ TEST_P(RackEsi, ConfiguratorsSeeOverwritableSlotPdosTimeoutsEnumsAndSharedModule
           (index >= 0x1600 && index <= 0x16FE) || (index >= 0x1A00 && index <= 0x1AFE);
       user += is_user;
       EXPECT_EQ(p.attribute("OverwrittenByModule").as_bool(), slot) << index;
-      if (is_user || slot) EXPECT_EQ(p.attribute("Fixed").as_bool(), slot) << index;
+      if (is_user || slot) {
+        EXPECT_EQ(p.attribute("Fixed").as_bool(), slot) << index;
+      }
     }
   }
   EXPECT_EQ(user, 2u);
