@@ -4,8 +4,9 @@
 #include <map>
 #include <string>
 
+#include <rackcat_version.hpp>  // generated in the build tree by cmake/rackcat_version.cmake
+
 #include "apps/commands.hpp"
-#include "rackcat_version.hpp"  // generated: cmake/rackcat_version.cmake
 
 namespace rackcat::apps {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <utility>
 
-#include "apps/mailbox_events.hpp"
+#include "apps/rack_slave/mailbox_events.hpp"
 #include "esi/rack.hpp"
 
 namespace rackcat::apps {

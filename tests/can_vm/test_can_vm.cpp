@@ -25,6 +25,7 @@
 
 #include "mdp/rack_config.hpp"
 #include "modules/canopen/socketcan.hpp"
+#include "modules/control/control_api.hpp"
 #include "modules/rim/master.hpp"
 
 using namespace rackcat;
@@ -80,9 +81,26 @@ bool has_rim_bus(const std::string& rackcat) {
   return out.find("--rim-bus") != std::string::npos;
 }
 
+// The control API's per-run secret, which `rackcat run` writes into its state directory at
+// start; empty until the file is there. Every request must carry it as a bearer token.
+std::string control_token(const std::string& state_dir) {
+  FILE* f = std::fopen((state_dir + "/" + modules::kTokenFileName).c_str(), "r");
+  if (!f) return {};
+  char buf[256] = {};
+  const bool ok = std::fgets(buf, sizeof buf, f) != nullptr;
+  std::fclose(f);
+  if (!ok) return {};
+  std::string token(buf);
+  while (!token.empty() && (token.back() == '\n' || token.back() == '\r')) token.pop_back();
+  return token;
+}
+
 // The RIM states `rackcat run` shows in 0x2rr1:08 (control API /api/exceptions): rim -> state.
-std::map<int, std::string> rim_states(httplib::Client& cli) {
+std::map<int, std::string> rim_states(httplib::Client& cli, const std::string& state_dir) {
   std::map<int, std::string> out;
+  const std::string token = control_token(state_dir);
+  if (token.empty()) return out;
+  cli.set_bearer_token_auth(token);
   auto res = cli.Get("/api/exceptions");
   if (!res || res->status != 200) return out;
   const auto j = nlohmann::json::parse(res->body, nullptr, false);
@@ -94,11 +112,12 @@ std::map<int, std::string> rim_states(httplib::Client& cli) {
 // Stage 2: `rackcat run --iface lo --rim-bus can:IFACE` with RIMs 1 and 2 as processes; kill
 // RIM 2 and time OFFLINE in 0x2rr1:08, restart it and wait for ONLINE.
 bool run_stage(const std::string& rackcat, const std::string& iface, std::string& text) {
+  static constexpr const char* kStateDir = "/tmp/rackcat-state";
   const pid_t run = fork();
   if (run == 0) {
     const std::string bus = "can:" + iface;
     execl(rackcat.c_str(), rackcat.c_str(), "run", "--iface", "lo", "--rim-bus", bus.c_str(),
-          "--no-pty", "--control-port", "8765", "--state-dir", "/tmp/rackcat-state",
+          "--no-pty", "--control-port", "8765", "--state-dir", kStateDir,
           static_cast<char*>(nullptr));
     std::perror("exec rackcat run");
     _exit(127);
@@ -109,7 +128,7 @@ bool run_stage(const std::string& rackcat, const std::string& iface, std::string
   cli.set_connection_timeout(0, 200000);
   cli.set_read_timeout(1, 0);
   auto state_of = [&](int rim) {
-    const auto s = rim_states(cli);
+    const auto s = rim_states(cli, kStateDir);
     const auto it = s.find(rim);
     return it == s.end() ? std::string("?") : it->second;
   };
