@@ -76,7 +76,7 @@ struct Event {
   // Copies at most 23 characters into text (no allocation).
   void set_text(std::string_view s) {
     const size_t n = s.size() < text.size() - 1 ? s.size() : text.size() - 1;
-    std::memcpy(text.data(), s.data(), n);
+    if (n > 0) std::memcpy(text.data(), s.data(), n);  // an empty view may have no data()
     text[n] = '\0';
   }
 };
