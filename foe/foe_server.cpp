@@ -128,7 +128,9 @@ size_t FoeServer::send_data(std::span<uint8_t> reply) {
   last_max_ = reply.size() - FoeHeader::kSize;
   last_sent_ = std::min(last_max_, file_.size() - offset_);
   ++packet_;
-  std::memcpy(reply.data() + FoeHeader::kSize, file_.data() + offset_, last_sent_);
+  // An empty file (the last packet of an exact multiple, or a 0-byte file) has no data().
+  if (last_sent_ > 0)
+    std::memcpy(reply.data() + FoeHeader::kSize, file_.data() + offset_, last_sent_);
   return simple(OpCode::Data, packet_, reply) + last_sent_;
 }
 

@@ -15,6 +15,7 @@ wrong answer (abort, mailbox error) is a failure.
 """
 import argparse
 import json
+import os
 import sys
 import threading
 import time
@@ -33,9 +34,13 @@ def rss_kib(pid):
     return -1
 
 
+TOKEN = ""  # the control API's per-run secret, read from the state directory in main()
+
+
 def api(path, body):
     req = urllib.request.Request(API + path, data=json.dumps(body).encode(),
-                                 headers={"Content-Type": "application/json"}, method="POST")
+                                 headers={"Content-Type": "application/json",
+                                          "Authorization": f"Bearer {TOKEN}"}, method="POST")
     with urllib.request.urlopen(req, timeout=3) as r:
         return r.status
 
@@ -62,7 +67,16 @@ def main():
     ap.add_argument("--pid", type=int, required=True)
     ap.add_argument("--minutes", type=float, default=1.0)
     ap.add_argument("--slaves", type=int, default=1)
+    ap.add_argument("--state-dir", required=True, help="rackcat run's --state-dir (control token)")
     args = ap.parse_args()
+    global TOKEN
+    token_file = os.path.join(args.state_dir, "control-token")
+    for _ in range(50):  # rackcat run writes it at start
+        if os.path.exists(token_file):
+            break
+        time.sleep(0.1)
+    with open(token_file) as f:
+        TOKEN = f.readline().strip()
 
     master = pysoem.Master()
     master.open(args.iface)

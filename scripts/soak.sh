@@ -47,7 +47,7 @@ SLAVE=$!
 sleep 0.5
 rc=0
 ip netns exec "$NS" "$PY" scripts/soak.py ecat-master --pid "$SLAVE" \
-  --minutes "$MINUTES" --slaves "$SLAVES" || rc=$?
+  --minutes "$MINUTES" --slaves "$SLAVES" --state-dir "$STATE" || rc=$?
 kill -INT "$SLAVE" 2>/dev/null || true
 wait "$SLAVE" 2>/dev/null || true
 grep -E "stopped" "$STATE/rackcat.log" || true
