@@ -1,6 +1,7 @@
 // `rackcat run`: the emulated rack(s) on a network interface, answering a real master.
 //
-//   rackcat run --iface IFACE [--config FILE] [--slaves N] [--busy-poll] [--pcap FILE]
+//   rackcat run --iface IFACE [--config FILE] [--slaves N | --line FILE] [--busy-poll] [--pcap
+//   FILE]
 //               [--state-dir DIR] [--control-port P] [--user USER] [--rim-bus can:IFACE]
 //
 // Parses the rack file, opens the raw socket (needs CAP_NET_RAW) and the capture file, drops
@@ -27,8 +28,11 @@
 
 #include "apps/commands.hpp"
 #include "apps/event_logger.hpp"
+#include "apps/line/line_file.hpp"
 #include "apps/rack_slave/rack_loading.hpp"
 #include "apps/rack_slave/rack_slave.hpp"
+#include "device/esi_error.hpp"
+#include "device/generic_device.hpp"
 #include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
 #include "mdp/file_root.hpp"
@@ -58,6 +62,7 @@ struct RunArgs {
   uint16_t boot_mailbox_size = mdp::sm::kBootMailboxSize;
   std::optional<uint32_t> foe_password;
   LogOptions log;
+  std::string line;  // a line file (docs/LINE.md): ESI devices and racks in order
 };
 
 int run(const RunArgs& a) {
@@ -65,10 +70,26 @@ int run(const RunArgs& a) {
   std::vector<std::unique_ptr<RackSlave>> racks;
   const std::string state_dir = a.state_dir.empty() ? mdp::default_state_dir() : a.state_dir;
   configure_logging(a.log);
-  auto config = load_rack_or_report(a.config);
-  if (!config) return ecat::kExitUsage;
-  config->control.boot_mailbox_size = a.boot_mailbox_size;
-  if (a.foe_password) config->control.foe_password = *a.foe_password;
+  std::optional<mdp::RackConfig> config;
+  std::optional<LineFile> line_file;
+  if (!a.line.empty()) {
+    try {
+      line_file = load_line_file(a.line);
+    } catch (const device::FileError& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      return ecat::kExitUsage;
+    }
+    for (auto& d : line_file->devices) {
+      if (!d.rack) continue;
+      d.rack->control.boot_mailbox_size = a.boot_mailbox_size;
+      if (a.foe_password) d.rack->control.foe_password = *a.foe_password;
+    }
+  } else {
+    config = load_rack_or_report(a.config);
+    if (!config) return ecat::kExitUsage;
+    config->control.boot_mailbox_size = a.boot_mailbox_size;
+    if (a.foe_password) config->control.foe_password = *a.foe_password;
+  }
 
   // Socket and capture file first, then the drop, before any thread exists.
   ecat::Runner runner({.interface_name = a.iface,
@@ -82,27 +103,47 @@ int run(const RunArgs& a) {
   // channel sources name are opened with its rights.
   const auto state = mdp::StateDirectory::open(state_dir);
   if (!state->usable()) spdlog::warn("rackcat: {}", state->problem());
-  racks.reserve(static_cast<size_t>(a.slaves));
+  std::vector<ecat::Application*> line;
+  std::vector<size_t> rack_position;  // line position of racks[i]
+  std::vector<std::unique_ptr<device::GenericDevice>> generics;
   try {
     // Channel sources of the rack file are parsed by the drivers: their errors are
     // configuration errors too (FILE:LINE).
-    for (int i = 0; i < a.slaves; ++i) {
-      racks.push_back(std::make_unique<RackSlave>(*config, state, i));
+    if (line_file) {
+      std::vector<device::GenericDevice*> at(line_file->devices.size(), nullptr);
+      for (size_t i = 0; i < line_file->devices.size(); ++i) {
+        auto& d = line_file->devices[i];
+        if (d.esi) {
+          generics.push_back(std::make_unique<device::GenericDevice>(std::move(*d.esi)));
+          at[i] = generics.back().get();
+          line.push_back(generics.back().get());
+        } else {
+          racks.push_back(
+              std::make_unique<RackSlave>(*d.rack, state, static_cast<int>(racks.size())));
+          rack_position.push_back(i);
+          line.push_back(racks.back().get());
+        }
+      }
+      for (const auto& w : line_file->wiring)
+        at[w.to]->add_wire(*at[w.from], w.from_bit, w.to_bit, w.bits);
+    } else {
+      for (int i = 0; i < a.slaves; ++i) {
+        racks.push_back(std::make_unique<RackSlave>(*config, state, i));
+        rack_position.push_back(static_cast<size_t>(i));
+        line.push_back(racks.back().get());
+      }
     }
   } catch (const mdp::ConfigError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return ecat::kExitUsage;
   }
-
-  std::vector<ecat::Application*> line;
-  line.reserve(racks.size());
-  for (auto& r : racks) line.push_back(r.get());
   ecat::Segment segment(line);
 
   // A rack that must leave OP (a RIM lost with Detect Modules Override 0) asks the ESC through
   // the loop, after the current frame, like a local application error (ETG.1000.6 §5.3.3).
-  for (size_t i = 0; i < racks.size(); ++i) {
-    racks[i]->rack().set_state_request_handler(
+  for (size_t r = 0; r < racks.size(); ++r) {
+    const size_t i = rack_position[r];
+    racks[r]->rack().set_state_request_handler(
         [&runner, &segment, i](coe::EsmState to, uint16_t code) {
           runner.loop().post([&segment, i, to, code] {
             segment.slave(i).esc().application_error(static_cast<ecat::AlState>(to), code);
@@ -111,28 +152,45 @@ int run(const RunArgs& a) {
   }
 
   // 0xFBF0 device reset: the rack restarts its ESC side too (back to INIT, no error).
-  for (size_t i = 0; i < racks.size(); ++i) {
-    racks[i]->set_restart_handler([&runner, &segment, i] {
+  for (size_t r = 0; r < racks.size(); ++r) {
+    const size_t i = rack_position[r];
+    racks[r]->set_restart_handler([&runner, &segment, i] {
       runner.loop().post([&segment, i] { segment.slave(i).esc().application_restart(); });
     });
   }
 
   // From here on the cyclic path reports its events; this thread writes them (base/event_log).
   const EventLogger event_logger;
-  const auto& cfg = racks.front()->device().config();
-  spdlog::info("rackcat: {} slave(s) on {} ({}), rack {}: {} RIM(s), {} module(s)", a.slaves,
-               a.iface, a.busy_poll ? "busy-poll" : "blocking", cfg.source, cfg.rims.size(),
-               cfg.modules.size());
-  spdlog::info("rackcat: state directory {}; {}; {}", state_dir,
-               racks.front()->device().load_report(), racks.front()->device().firmware_report());
-  for (size_t i = 1; i < racks.size(); ++i) {
-    spdlog::info("rackcat: slave {}: {}", i, racks[i]->device().load_report());
+  if (line_file) {
+    spdlog::info("rackcat: line {}: {} slave(s) on {} ({})", line_file->file, line.size(), a.iface,
+                 a.busy_poll ? "busy-poll" : "blocking");
+    size_t g = 0, r = 0;
+    for (size_t i = 0; i < line_file->devices.size(); ++i) {
+      if (r < rack_position.size() && rack_position[r] == i) {
+        spdlog::info("rackcat: slave {}: rack {} (control API rack {})", i,
+                     racks[r]->device().config().source, r);
+        ++r;
+      } else {
+        const auto& d = generics[g++]->esi().description;
+        spdlog::info("rackcat: slave {}: {} ({})", i, d.device_name, d.order_code);
+      }
+    }
+  } else {
+    const auto& cfg = racks.front()->device().config();
+    spdlog::info("rackcat: {} slave(s) on {} ({}), rack {}: {} RIM(s), {} module(s)", a.slaves,
+                 a.iface, a.busy_poll ? "busy-poll" : "blocking", cfg.source, cfg.rims.size(),
+                 cfg.modules.size());
+    spdlog::info("rackcat: state directory {}; {}; {}", state_dir,
+                 racks.front()->device().load_report(), racks.front()->device().firmware_report());
+    for (size_t i = 1; i < racks.size(); ++i) {
+      spdlog::info("rackcat: slave {}: {}", i, racks[i]->device().load_report());
+    }
   }
-  if (!a.no_ptys) racks.front()->rack().start_uart_ptys();
+  if (!a.no_ptys && !racks.empty()) racks.front()->rack().start_uart_ptys();
   // The control API of every slave (docs/MODULES.md "Control API"): a fresh secret in the state
   // directory (mode 0600, this user's), the port exclusively ours, and where ctl finds both.
   std::unique_ptr<modules::ControlApi> api;
-  if (!a.no_control) {
+  if (!a.no_control && !racks.empty()) {
     modules::ControlApiOptions options;
     try {
       options.token = modules::ControlApi::new_token();
@@ -171,6 +229,10 @@ int run(const RunArgs& a) {
   // RIMs on a CAN bus (docs/CAN.md): slave 0's rack follows their heartbeats and PDOs.
   std::unique_ptr<modules::canopen::ThreadedRimLink> rim_link;
   if (!a.rim_bus.empty()) {
+    if (racks.empty()) {
+      std::fprintf(stderr, "rackcat: --rim-bus needs a rack in the line\n");
+      return ecat::kExitUsage;
+    }
     try {
       rim_link = std::make_unique<modules::canopen::ThreadedRimLink>(
           racks.front()->rack(),
@@ -211,9 +273,14 @@ void add_run(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("run", "Run the emulated rack(s) on a network interface");
   cmd->add_option("--iface", args->iface, "network interface to answer EtherCAT frames on")
       ->required();
-  cmd->add_option("--config", args->config, "rack configuration (YAML); default: built-in rack");
-  cmd->add_option("--slaves", args->slaves, "number of slaves in the segment")
-      ->check(CLI::Range(1, 256));
+  auto* config = cmd->add_option("--config", args->config,
+                                 "rack configuration (YAML); default: built-in rack");
+  auto* slaves = cmd->add_option("--slaves", args->slaves, "number of slaves in the segment")
+                     ->check(CLI::Range(1, 256));
+  auto* line = cmd->add_option("--line", args->line,
+                               "line file (YAML): ESI devices and racks in order (docs/LINE.md)");
+  line->excludes(slaves);
+  line->excludes(config);
   cmd->add_flag("--busy-poll", args->busy_poll, "spin on the socket instead of blocking");
   cmd->add_option("--pcap", args->pcap, "record every frame in and out to this pcap file");
   cmd->add_option("--state-dir", args->state_dir,

@@ -64,6 +64,11 @@ void GenericDevice::set_input_bits(size_t bit, size_t bits, std::span<const uint
   copy_bits(source, source_bit, inputs_, bit, bits);
 }
 
+void GenericDevice::add_wire(const GenericDevice& source, size_t from_bit, size_t to_bit,
+                             size_t bits) {
+  wires_.push_back({&source, from_bit, to_bit, bits});
+}
+
 uint16_t GenericDevice::on_state_request(ecat::AlState from, ecat::AlState to) {
   if (image_ && from == ecat::AlState::PreOp && to == ecat::AlState::SafeOp) {
     // The assignment may have changed in PREOP: recompile (ETG.1000.6 Table 11 0x001D/0x001E
@@ -95,6 +100,10 @@ size_t GenericDevice::poll_mailbox(std::span<uint8_t> reply) {
 void GenericDevice::update_inputs(std::span<uint8_t> inputs) {
   std::unique_lock lock(mutex_, std::try_to_lock);
   if (!lock.owns_lock()) return;  // the control side is writing: keep last cycle's inputs
+  for (const auto& w : wires_) {
+    std::unique_lock source(w.source->mutex_, std::try_to_lock);
+    if (source.owns_lock()) copy_bits(w.source->outputs_, w.from_bit, inputs_, w.to_bit, w.bits);
+  }
   if (image_) {
     // Inputs set from outside land in the mapped objects, which the master reads via SM3.
     for (const auto& c : image_->input_copies()) {

@@ -32,6 +32,9 @@ class GenericDevice final : public ecat::Application {
   // Replace bits [bit, bit+bits) of the inputs (SM3 layout). Thread-safe.
   void set_input_bits(size_t bit, size_t bits, std::span<const uint8_t> source, size_t source_bit);
   std::vector<uint8_t> inputs() const;
+  // Loopback wiring: each cycle, bits [from_bit, from_bit+bits) of `source`'s outputs become
+  // bits [to_bit, ...) of this device's inputs. Call before the line runs.
+  void add_wire(const GenericDevice& source, size_t from_bit, size_t to_bit, size_t bits);
 
   std::span<const uint8_t> eeprom() const override { return sii_; }
   uint16_t on_state_request(ecat::AlState from, ecat::AlState to) override;
@@ -52,6 +55,11 @@ class GenericDevice final : public ecat::Application {
   mutable std::mutex mutex_;  // guards outputs_/inputs_ against the control side
   std::vector<uint8_t> outputs_;
   std::vector<uint8_t> inputs_;
+  struct Wire {
+    const GenericDevice* source;
+    size_t from_bit, to_bit, bits;
+  };
+  std::vector<Wire> wires_;
 };
 
 // Copies bits between byte buffers (LSB-first, EtherCAT bit order).
