@@ -102,7 +102,8 @@ struct Parser {
       } else {
         if (d["device"] || d["product_code"] || d["revision"])
           fail(d, "device:/product_code:/revision: belong to an esi: device");
-        if (alias) fail(d["alias"], "alias: on a rack: device is not supported (set it in the rack)");
+        if (alias)
+          fail(d["alias"], "alias: on a rack: device is not supported (set it in the rack)");
         const std::string rack_file = d["rack"].Scalar();
         const std::string yaml = read(d["rack"], rack_file);
         try {
@@ -161,7 +162,8 @@ struct Parser {
     wire.bits = static_cast<size_t>(bits);
     const auto& from = out.devices[wire.from];
     const auto& to = out.devices[wire.to];
-    if (!from.esi || !to.esi) fail(w, "wiring connects esi: devices only (racks wire their own loopbacks)");
+    if (!from.esi || !to.esi)
+      fail(w, "wiring connects esi: devices only (racks wire their own loopbacks)");
     // Sizes with the default assignment, as GenericDevice serves them.
     const size_t out_bits = 8u * device::GenericDevice(*from.esi).process_data_sizes().outputs;
     const size_t in_bits = 8u * device::GenericDevice(*to.esi).process_data_sizes().inputs;

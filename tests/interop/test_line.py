@@ -71,7 +71,7 @@ def test_line_reaches_op_with_esi_identities_and_loopback(ecat_segment, tmp_path
                     for o in esi["RC3102"][3].findall("./Profile/Dictionary/Objects/Object")}
         assert declared <= od_indices, (declared, od_indices)
         names = {obj.index: obj.name for obj in ai.od}
-        assert names[0x8000] == "AI Filter"
+        assert names[0x8000] == b"AI Filter"
         assert int.from_bytes(ai.sdo_read(0x1C13, 1), "little") == 0x1A00
         master.config_map()
         sizes = [(len(x.output), len(x.input)) for x in s[:4]]
