@@ -1,0 +1,119 @@
+// Line file: a good line and one precise FILE:LINE error per bad line file.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "apps/line/line_file.hpp"
+#include "device/esi_error.hpp"
+
+namespace rackcat::apps {
+namespace {
+
+namespace fs = std::filesystem;
+
+class LineFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("rackcat-line-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    fs::copy_file(fs::path(RACKCAT_DEVICE_TEST_DATA) / "rackcat-test-devices.xml",
+                  dir_ / "devices.xml", fs::copy_options::overwrite_existing);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string write(const std::string& text) {
+    const auto p = dir_ / "line.yaml";
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  void expect_error(const std::string& text, size_t line, const std::string& part) {
+    const auto path = write(text);
+    try {
+      load_line_file(path);
+      FAIL() << "no error for " << part;
+    } catch (const device::FileError& e) {
+      EXPECT_EQ(e.file(), path) << e.what();
+      EXPECT_EQ(e.line(), line) << e.what();
+      EXPECT_NE(e.reason().find(part), std::string::npos) << e.what();
+    }
+  }
+  fs::path dir_;
+};
+
+TEST_F(LineFileTest, DevicesCountsAliasesWiring) {
+  auto line =
+      load_line_file(write("devices:\n"
+                           "  - {esi: devices.xml, device: RC1100, alias: 0x100}\n"
+                           "  - {esi: devices.xml, device: RC1008, name: di, count: 2}\n"
+                           "  - {esi: devices.xml, device: RC2008, name: do}\n"
+                           "wiring:\n"
+                           "  - {from: do, to: di, bits: 8}\n"
+                           "  - {from: do, to: 2, bits: 4, to_bit: 4}\n"));
+  ASSERT_EQ(line.devices.size(), 4u);
+  EXPECT_EQ(line.devices[0].esi->description.config.station_alias, 0x100);
+  EXPECT_EQ(line.devices[2].name, "di#1");
+  EXPECT_EQ(line.devices[2].esi->description.serial, 1u);
+  ASSERT_EQ(line.wiring.size(), 2u);
+  EXPECT_EQ(line.wiring[0].from, 3u);
+  EXPECT_EQ(line.wiring[0].to, 1u);
+  EXPECT_EQ(line.wiring[1].line, 7u);
+}
+
+TEST_F(LineFileTest, MissingEsiDevice) {
+  // The ESI's own error, naming the ESI file.
+  const auto path = write("devices:\n  - {esi: devices.xml, device: NOPE}\n");
+  try {
+    load_line_file(path);
+    FAIL();
+  } catch (const device::FileError& e) {
+    EXPECT_NE(e.file().find("devices.xml"), std::string::npos) << e.what();
+    EXPECT_NE(e.reason().find("no <Device> matches name \"NOPE\""), std::string::npos);
+  }
+}
+
+TEST_F(LineFileTest, CyclicLoopback) {
+  // a's outputs drive b's inputs and b's outputs drive a's: a cycle through the wiring.
+  expect_error(
+      "devices:\n"
+      "  - {esi: devices.xml, device: RC4004, name: a}\n"
+      "  - {esi: devices.xml, device: RC4004, name: b}\n"
+      "wiring:\n"
+      "  - {from: a, to: b, bits: 4}\n"
+      "  - {from: b, to: a, bits: 4}\n",
+      6, "wiring cycle");  // the wire that closes it
+}
+
+TEST_F(LineFileTest, WireBeyondProcessData) {
+  expect_error(
+      "devices:\n"
+      "  - {esi: devices.xml, device: RC2008, name: do}\n"
+      "  - {esi: devices.xml, device: RC1008, name: di}\n"
+      "wiring:\n"
+      "  - {from: do, to: di, bits: 9}\n",
+      5, "wire reads output bits 0..8 but the device has 8 output bits");
+}
+
+TEST_F(LineFileTest, DoubleDrivenInput) {
+  expect_error(
+      "devices:\n"
+      "  - {esi: devices.xml, device: RC2008, name: do}\n"
+      "  - {esi: devices.xml, device: RC1008, name: di}\n"
+      "wiring:\n"
+      "  - {from: do, to: di, bits: 8}\n"
+      "  - {from: do, to: di, bits: 1, to_bit: 7}\n",
+      6, "already driven by the wire on line 5");
+}
+
+TEST_F(LineFileTest, FileOutsideTheLineDirectory) {
+  expect_error("devices:\n  - {esi: ../devices.xml, device: RC1008}\n", 2, "not below");
+}
+
+TEST_F(LineFileTest, UnknownKey) {
+  expect_error("devices:\n  - {esi: devices.xml, device: RC1008, colour: red}\n", 2,
+               "unknown device key \"colour\"");
+}
+
+}  // namespace
+}  // namespace rackcat::apps
