@@ -21,13 +21,13 @@ struct Parser {
   std::shared_ptr<const mdp::FileRoot> root;
 
   [[noreturn]] void fail(const YAML::Node& at, const std::string& reason) const {
-    throw device::FileError(file, at.IsDefined() ? static_cast<size_t>(at.Mark().line + 1) : 0,
+    throw device::FileError(file, at.IsDefined() ? static_cast<size_t>(at.Mark().line) + 1 : 0,
                             reason);
   }
 
   int64_t integer(const YAML::Node& n, const char* what) const {
     if (!n.IsScalar()) fail(n, std::string(what) + ": expected a number");
-    const std::string s = n.Scalar();
+    const std::string& s = n.Scalar();
     try {
       size_t used = 0;
       const long long v = std::stoll(s, &used, 0);
@@ -51,7 +51,7 @@ struct Parser {
     try {
       doc = YAML::Load(text);
     } catch (const YAML::Exception& e) {
-      throw device::FileError(file, static_cast<size_t>(e.mark.line + 1), e.msg);
+      throw device::FileError(file, static_cast<size_t>(e.mark.line) + 1, e.msg);
     }
     LineFile out;
     out.file = file;
@@ -111,13 +111,13 @@ struct Parser {
               yaml, (std::filesystem::path(root->path()) / rack_file).string()));
         } catch (const std::exception& e) {
           // The rack file's own FILE:LINE message, as `rackcat check` gives it.
-          throw device::FileError(file, static_cast<size_t>(d["rack"].Mark().line + 1),
+          throw device::FileError(file, static_cast<size_t>(d["rack"].Mark().line) + 1,
                                   std::string("rack file: ") + e.what());
         }
       }
       for (int64_t k = 0; k < count; ++k) {
         LineDevice ld;
-        ld.line = static_cast<size_t>(d.Mark().line + 1);
+        ld.line = static_cast<size_t>(d.Mark().line) + 1;
         ld.name = name.empty() ? "" : (k == 0 ? name : name + "#" + std::to_string(k));
         if (esi_proto) {
           ld.esi = std::make_unique<device::EsiDevice>(*esi_proto);
@@ -151,7 +151,7 @@ struct Parser {
                   LineFile& out) const {
     if (!w.IsMap()) fail(w, "a wire is {from:, to:, bits:, from_bit:, to_bit:}");
     LineWire wire;
-    wire.line = static_cast<size_t>(w.Mark().line + 1);
+    wire.line = static_cast<size_t>(w.Mark().line) + 1;
     wire.from = device_ref(w["from"], by_name, out);
     wire.to = device_ref(w["to"], by_name, out);
     wire.from_bit = w["from_bit"] ? static_cast<size_t>(integer(w["from_bit"], "from_bit")) : 0;
