@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every libFuzzer target (fuzz_* executables of a RACKCAT_FUZZ=ON build) on its seed
-# corpus for a bounded time. Any crash, leak or sanitizer report fails.
+# corpus for a bounded time. Any crash, leak or sanitizer report fails; every target runs even after
+# one fails, and a summary lists each target's result (exit 1 if any failed).
 #
 #   scripts/fuzz.sh [--build-dir DIR] [--seconds N | --minutes N]
 #
@@ -27,6 +28,8 @@ fi
 cmake --build "$BUILD" -j "${JOBS:-$(nproc)}" >/dev/null
 mapfile -t targets < <(find "$BUILD" -maxdepth 3 -type f -name 'fuzz_*' -perm -u+x | sort)
 if [ ${#targets[@]} -eq 0 ]; then echo "fuzz: no targets built"; exit 1; fi
+failed=()
+summary=()
 for t in "${targets[@]}"; do
   name=$(basename "$t"); name=${name#fuzz_}
   work=fuzz/corpus-work/$name
@@ -36,9 +39,24 @@ for t in "${targets[@]}"; do
   [ -d "fuzz/$area/corpus" ] && cp -n fuzz/"$area"/corpus/* "$work"/ 2>/dev/null || true
   echo "fuzz: $name for ${SECONDS_PER_TARGET}s"
   log=fuzz/corpus-work/$name.log
-  if ! ASAN_OPTIONS=detect_leaks=1 "$t" -max_total_time="$SECONDS_PER_TARGET" -print_final_stats=1 \
+  # One failing target does not hide the others: every target runs, each is reported.
+  if ASAN_OPTIONS=detect_leaks=1 "$t" -max_total_time="$SECONDS_PER_TARGET" -print_final_stats=1 \
     -artifact_prefix="fuzz/corpus-work/crash-$name-" "$work" >"$log" 2>&1; then
-    tail -n 60 "$log"; echo "fuzz: $name FAILED"; exit 1
+    grep -E '^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)|cov: ' "$log" | tail -n 4 || true
+    runs=$(grep -E '^stat::number_of_executed_units' "$log" | awk '{print $2}' | tail -n 1 || true)
+    summary+=("$(printf '  %-28s ok      %s runs' "$name" "${runs:-?}")")
+  else
+    rc=$?
+    tail -n 60 "$log"
+    echo "fuzz: $name FAILED (exit $rc; log $log, artifacts fuzz/corpus-work/crash-$name-*)"
+    failed+=("$name")
+    summary+=("$(printf '  %-28s FAILED  exit %s, %s' "$name" "$rc" "$log")")
   fi
-  grep -E '^stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb)|cov: ' "$log" | tail -n 4
 done
+echo "fuzz: summary (${#targets[@]} targets, ${SECONDS_PER_TARGET}s each)"
+printf '%s\n' "${summary[@]}"
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "fuzz: ${#failed[@]} of ${#targets[@]} targets FAILED: ${failed[*]}"
+  exit 1
+fi
+echo "fuzz: all ${#targets[@]} targets passed"
