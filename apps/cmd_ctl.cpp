@@ -1,7 +1,8 @@
-// `rackcat ctl [--port P] <command>`: the client of a running rack's fault-injection control
-// API (modules/control/control_api.hpp, HTTP + JSON on 127.0.0.1). Prints the answer (JSON, or a
-// table for `list`); an invalid request prints the API's reason and exits 2, an unreachable
-// rack exits 1.
+// `rackcat ctl [--port P] [--json] <command>`: the client of a running rack's fault-injection
+// control API (modules/control/control_api.hpp, HTTP + JSON on 127.0.0.1). Every command prints
+// the rack's state after the request as text, or the API's JSON answer with --json (before or
+// after the command name); an invalid request prints the API's reason and exits 2, an
+// unreachable rack exits 1.
 #include <httplib.h>
 
 #include <cstdio>
@@ -70,9 +71,10 @@ std::string read_token_file(const std::string& path) {
   return line;
 }
 
+using Printer = void (*)(const json&);
+
 [[noreturn]] void request(const CtlOptions& o, const std::string& method,
-                          const std::string& api_path, const json& body,
-                          void (*print)(const json&) = nullptr) {
+                          const std::string& api_path, const json& body, Printer print) {
   // The rack's secret and port: where `rackcat run` wrote them (docs/MODULES.md "Control API").
   const std::string dir = o.state_dir.empty() ? mdp::default_state_dir() : o.state_dir;
   int port = o.port;
@@ -113,10 +115,16 @@ std::string read_token_file(const std::string& path) {
     std::fprintf(stderr, "rackcat ctl: %s\n", reason.c_str());
     exit_with(res->status >= 500 ? 1 : 2);
   }
-  if (print != nullptr && !o.json_output && !answer.is_discarded()) {
-    print(answer);
-  } else {
+  if (o.json_output || answer.is_discarded()) {
     std::printf("%s", res->body.c_str());
+  } else {
+    try {
+      print(answer);
+    } catch (const json::exception& e) {
+      // An answer of another shape (a newer rack): show it as it came rather than half a table.
+      std::fprintf(stderr, "rackcat ctl: unexpected answer (%s); as received:\n", e.what());
+      std::printf("%s", res->body.c_str());
+    }
   }
   exit_with(0);
 }
@@ -192,6 +200,77 @@ void print_diagnosis(const json& d) {
   }
 }
 
+// `rackcat ctl esm`.
+void print_esm(const json& e) {
+  std::printf("ESM %s  outputs %s  detect modules override %d\n",
+              e["state"].get<std::string>().c_str(),
+              e["outputs_valid"].get<bool>() ? "valid" : "not driven",
+              e["detect_modules_override"].get<bool>() ? 1 : 0);
+}
+
+// The exception tree (guide §3.4: 0xF380 summary, 0xF382/0xF384 per module, 0xF386/0xF388
+// global, 0xF39x their latched copies) and each RIM's state; the answer of every command that
+// changes a fault.
+void print_exceptions(const json& t) {
+  std::printf("0xF380 summary %s (latched 0xF390 %s)  device event status %s\n",
+              t["F380"].get<std::string>().c_str(), t["F390"].get<std::string>().c_str(),
+              t["device_event_status"].get<std::string>().c_str());
+  std::printf("global warnings 0xF386:01 %s  errors 0xF388:01 %s  (latched %s / %s)\n",
+              t["F386"].get<std::string>().c_str(), t["F388"].get<std::string>().c_str(),
+              t["F396"].get<std::string>().c_str(), t["F398"].get<std::string>().c_str());
+  for (const auto& rim : t["rims"]) {
+    std::printf("RIM %d %-9s event status %s\n", rim["rim"].get<int>(),
+                rim["state"].get<std::string>().c_str(),
+                rim["event_status"].get<std::string>().c_str());
+  }
+  if (t["modules"].empty()) std::printf("no module warnings or errors\n");
+  for (const auto& m : t["modules"]) {
+    std::printf("module %3d  warnings 0xF382 %s  errors 0xF384 %s  (latched %s / %s)\n",
+                m["module"].get<int>(), m["F382"].get<std::string>().c_str(),
+                m["F384"].get<std::string>().c_str(), m["F392"].get<std::string>().c_str(),
+                m["F394"].get<std::string>().c_str());
+  }
+}
+
+// `rackcat ctl cpu-temp`: the zone temperature and what 0x2000:0F publishes (guide §4.8).
+void print_cpu_temperature(const json& c) {
+  std::printf("CPU temperature %.1f degC, 0x2000:0F publishes %.1f degC\n",
+              c["cpu_temperature"].get<double>(), c["published"].get<double>());
+}
+
+// `rackcat ctl uart`: the module after the injection and how many bytes its receive ring took.
+void print_uart(const json& m) {
+  print_module(m);
+  std::printf("accepted %d bytes\n", m["accepted"].get<int>());
+}
+
+// `rackcat ctl wiring-fault` / `fan`: the module or fan after the change, then the tree.
+void print_fault_answer(const json& a) {
+  if (a.contains("module_state")) print_module(a["module_state"]);
+  if (a.contains("fans")) {
+    const json& f = a["fans"];
+    std::printf("CPU fan %.0f rpm\n", f["cpu_fan_rpm"].get<double>());
+    for (const auto& rim : f["rims"]) {
+      std::printf("RIM %d fans: power supply %s, slot card %s\n", rim["rim"].get<int>(),
+                  rim["power_supply_fan"].get<bool>()
+                      ? std::to_string(rim["power_supply_rpm"].get<int>()).c_str()
+                      : "none",
+                  rim["slot_card_fan"].get<bool>()
+                      ? std::to_string(rim["slot_card_rpm"].get<int>()).c_str()
+                      : "none");
+    }
+  }
+  print_exceptions(a);
+}
+
+// Every command takes --json, so `rackcat ctl --json X` and `rackcat ctl X --json` both work.
+CLI::App* command(CLI::App* ctl, const std::shared_ptr<CtlOptions>& o, const char* name,
+                  const char* description) {
+  CLI::App* c = ctl->add_subcommand(name, description);
+  c->add_flag("--json", o->json_output, "print the API's JSON answer instead of text");
+  return c;
+}
+
 void add_ctl(CLI::App& app) {
   auto o = std::make_shared<CtlOptions>();
   CLI::App* ctl = app.add_subcommand(
@@ -203,24 +282,24 @@ void add_ctl(CLI::App& app) {
                   "control-token and control-port files");
   ctl->add_option("--token-file", o->token_file, "read the control token from this file");
   ctl->add_option("--slave", o->slave, "slave of the segment (0-based)")->check(CLI::Range(0, 255));
+  ctl->add_flag("--json", o->json_output, "print the API's JSON answer instead of text");
   ctl->require_subcommand(1);
 
-  CLI::App* list = ctl->add_subcommand("list", "RIMs, modules and channels with live values");
+  CLI::App* list = command(ctl, o, "list", "RIMs, modules and channels with live values");
   list->add_option("--module", o->module, "only this module (1..255)");
-  list->add_flag("--json", o->json_output, "print the JSON answer");
   list->callback([o] {
     if (o->module > 0)
       request(*o, "GET", "/api/modules/" + std::to_string(o->module), {}, print_module);
     request(*o, "GET", "/api/rack", {}, print_rack);
   });
 
-  ctl->add_subcommand("esm", "the EtherCAT state and whether outputs are driven")->callback([o] {
-    request(*o, "GET", "/api/esm", {});
+  command(ctl, o, "esm", "the EtherCAT state and whether outputs are driven")->callback([o] {
+    request(*o, "GET", "/api/esm", {}, print_esm);
   });
-  ctl->add_subcommand("exceptions", "event status and the exception tree 0xF380..0xF398")
-      ->callback([o] { request(*o, "GET", "/api/exceptions", {}); });
+  command(ctl, o, "exceptions", "event status and the exception tree 0xF380..0xF398")
+      ->callback([o] { request(*o, "GET", "/api/exceptions", {}, print_exceptions); });
 
-  CLI::App* set = ctl->add_subcommand("set", "set an input channel's value or signal source");
+  CLI::App* set = command(ctl, o, "set", "set an input channel's value or signal source");
   set->add_option("--module", o->module, "module number")->required();
   set->add_option("--channel", o->channel, "input channel (0-based)")->required();
   auto* value = set->add_option("--value", o->value_opt, "a constant value (V, degC or 0/1)");
@@ -231,7 +310,11 @@ void add_ctl(CLI::App& app) {
       "rim+slot, channel, gain, offset), plant (plant, a, b, c, d, x0, inputs, output) or "
       "clock (tick_us); parameters with --param");
   value->excludes(source);
-  set->add_option("--param", o->params, "source parameter key=value (repeatable)")->needs(source);
+  set->add_option(
+         "--param", o->params,
+         "source parameter key=value (repeatable); also the channel options loop_ohms=OHMS "
+         "(thermocouple) and open=true|false (thermocouple, RTD)")
+      ->needs(source);
   set->callback([o] {
     json body{{"module", o->module}, {"channel", o->channel}};
     if (o->value_opt) {
@@ -255,56 +338,60 @@ void add_ctl(CLI::App& app) {
     request(*o, "POST", "/api/channel", body, print_module);
   });
 
-  CLI::App* unplug = ctl->add_subcommand("unplug", "take a RIM offline (cable pulled)");
+  CLI::App* unplug = command(ctl, o, "unplug", "take a RIM offline (cable pulled)");
   unplug->add_option("--rim", o->rim, "RIM number 1..5")->required();
   unplug->add_flag("--comm-error", o->comm_error, "offline through a communication error");
   unplug->callback([o] {
-    request(*o, "POST", "/api/rim/unplug", {{"rim", o->rim}, {"comm_error", o->comm_error}});
+    request(*o, "POST", "/api/rim/unplug", {{"rim", o->rim}, {"comm_error", o->comm_error}},
+            print_exceptions);
   });
-  CLI::App* replug = ctl->add_subcommand("replug", "bring a RIM back online");
+  CLI::App* replug = command(ctl, o, "replug", "bring a RIM back online");
   replug->add_option("--rim", o->rim, "RIM number 1..5")->required();
-  replug->callback([o] { request(*o, "POST", "/api/rim/replug", {{"rim", o->rim}}); });
-  CLI::App* rim_state = ctl->add_subcommand("rim-state", "set a RIM's communication state");
+  replug->callback([o] {
+    request(*o, "POST", "/api/rim/replug", {{"rim", o->rim}}, print_exceptions);
+  });
+  CLI::App* rim_state = command(ctl, o, "rim-state", "set a RIM's communication state");
   rim_state->add_option("--rim", o->rim, "RIM number 1..5")->required();
   rim_state->add_option("--state", o->state, "offline, connected, online or error")->required();
   rim_state->add_flag("--comm-error", o->comm_error, "with a communication error");
   rim_state->callback([o] {
     request(*o, "POST", "/api/rim/state",
-            {{"rim", o->rim}, {"state", o->state}, {"comm_error", o->comm_error}});
+            {{"rim", o->rim}, {"state", o->state}, {"comm_error", o->comm_error}},
+            print_exceptions);
   });
 
-  CLI::App* mcm = ctl->add_subcommand("mcm-error", "set a RIM's safety-controller errors");
+  CLI::App* mcm = command(ctl, o, "mcm-error", "set a RIM's safety-controller errors");
   mcm->add_option("--rim", o->rim, "RIM number 1..5")->required();
   mcm->add_option("--error", o->params,
                   "slot_machine_mcm0, sout_compare_mcm0, slot_machine_mcm1, sout_compare_mcm1 "
                   "(repeatable; none given = all cleared)");
   mcm->callback([o] {
-    request(*o, "POST", "/api/rim/mcm", {{"rim", o->rim}, {"errors", o->params}});
+    request(*o, "POST", "/api/rim/mcm", {{"rim", o->rim}, {"errors", o->params}}, print_exceptions);
   });
 
-  CLI::App* fan = ctl->add_subcommand("fan", "set a fan's RPM (nominal 3000)");
+  CLI::App* fan = command(ctl, o, "fan", "set a fan's RPM (nominal 3000)");
   fan->add_option("--rim", o->rim, "RIM number, 0 = control module CPU fan")->required();
   fan->add_option("--zone", o->zone, "cpu, power_supply or slot_card");
   fan->add_option("--rpm", o->rpm, "revolutions per minute")->required();
   fan->callback([o] {
     json body{{"rim", o->rim}, {"rpm", o->rpm}};
     if (!o->zone.empty()) body["zone"] = o->zone;
-    request(*o, "POST", "/api/fan", body);
+    request(*o, "POST", "/api/fan", body, print_fault_answer);
   });
 
-  CLI::App* cpu = ctl->add_subcommand("cpu-temp", "set the CPU zone temperature (0x2000:0F)");
+  CLI::App* cpu = command(ctl, o, "cpu-temp", "set the CPU zone temperature (0x2000:0F)");
   cpu->add_option("--celsius", o->celsius, "degrees Celsius")->required();
   cpu->add_flag("--now", o->now, "publish now instead of at the next 30 s update");
   cpu->callback([o] {
-    request(*o, "POST", "/api/cpu_temperature", {{"celsius", o->celsius}, {"immediate", o->now}});
+    request(*o, "POST", "/api/cpu_temperature", {{"celsius", o->celsius}, {"immediate", o->now}},
+            print_cpu_temperature);
   });
 
-  CLI::App* dg = ctl->add_subcommand(
-      "diag", "the diagnosis history 0x10F3 as text (ETG.1020; + = acknowledged)");
-  dg->add_flag("--json", o->json_output, "print the JSON answer");
+  CLI::App* dg =
+      command(ctl, o, "diag", "the diagnosis history 0x10F3 as text (ETG.1020; + = acknowledged)");
   dg->callback([o] { request(*o, "GET", "/api/diagnosis", {}, print_diagnosis); });
 
-  CLI::App* of = ctl->add_subcommand("output-fault", "overload / overtemperature of an output");
+  CLI::App* of = command(ctl, o, "output-fault", "overload / overtemperature of an output");
   of->add_option("--module", o->module, "module number")->required();
   of->add_option("--channel", o->channel, "output channel (0-based)")->required();
   of->add_option("--overload", o->overload, "true or false");
@@ -324,17 +411,18 @@ void add_ctl(CLI::App& app) {
     request(*o, "POST", "/api/output_fault", body, print_diagnosis);
   });
 
-  CLI::App* wf = ctl->add_subcommand("wiring-fault", "force a wiring fault on a sourcing output");
+  CLI::App* wf = command(ctl, o, "wiring-fault", "force a wiring fault on a sourcing output");
   wf->add_option("--module", o->module, "module number")->required();
   wf->add_option("--channel", o->channel, "output channel (0-based)")->required();
   wf->add_option("--fault", o->fault, "none, safe (wire reads low) or unsafe (wire reads high)")
       ->required();
   wf->callback([o] {
     request(*o, "POST", "/api/wiring_fault",
-            {{"module", o->module}, {"channel", o->channel}, {"fault", o->fault}});
+            {{"module", o->module}, {"channel", o->channel}, {"fault", o->fault}},
+            print_fault_answer);
   });
 
-  CLI::App* sensor = ctl->add_subcommand("sensor", "open/close a thermocouple or RTD, loop ohms");
+  CLI::App* sensor = command(ctl, o, "sensor", "open/close a thermocouple or RTD, loop ohms");
   sensor->add_option("--module", o->module, "module number")->required();
   sensor->add_option("--channel", o->channel, "input channel (0-based)")->required();
   auto* open = sensor->add_flag("--open", o->open, "break the sensor wire");
@@ -347,7 +435,7 @@ void add_ctl(CLI::App& app) {
     request(*o, "POST", "/api/sensor", body, print_module);
   });
 
-  CLI::App* uart = ctl->add_subcommand("uart", "inject received bytes or line errors");
+  CLI::App* uart = command(ctl, o, "uart", "inject received bytes or line errors");
   uart->add_option("--module", o->module, "UART module number")->required();
   uart->add_option("--channel", o->channel, "channel 0..3")->required();
   uart->add_option("--text", o->text, "bytes as text");
@@ -366,7 +454,7 @@ void add_ctl(CLI::App& app) {
       }
       body["cts"] = o->cts == "true";
     }
-    request(*o, "POST", "/api/uart/inject", body, print_module);
+    request(*o, "POST", "/api/uart/inject", body, print_uart);
   });
 }
 

@@ -3,6 +3,7 @@
 #include <exception>
 #include <map>
 #include <string>
+#include <vector>
 
 #include <rackcat_version.hpp>  // generated in the build tree by cmake/rackcat_version.cmake
 
@@ -43,9 +44,15 @@ int main(int argc, char** argv) {
         std::string("rackcat ") + RACKCAT_VERSION + " (git " + RACKCAT_GIT_REVISION + ")";
     app.set_version_flag("--version", version, "Print the version and exit");
     rackcat::apps::register_all(app);
-    // `rackcat SUBCOMMAND --version` too.
-    for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    // `rackcat SUBCOMMAND [SUBCOMMAND...] --version` too, at every depth (`ctl esm --version`).
+    std::vector<CLI::App*> pending = app.get_subcommands([](CLI::App*) { return true; });
+    while (!pending.empty()) {
+      CLI::App* sub = pending.back();
+      pending.pop_back();
       sub->set_version_flag("--version", version, "Print the version and exit");
+      for (CLI::App* nested : sub->get_subcommands([](CLI::App*) { return true; })) {
+        pending.push_back(nested);
+      }
     }
     try {
       app.parse(argc, argv);

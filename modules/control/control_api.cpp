@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 #include <sys/random.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
+#include <initializer_list>
 #include <mutex>
 #include <stdexcept>
 
@@ -63,6 +65,23 @@ std::string printable(std::string_view s) {
     if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
   }
   return out;
+}
+
+// Every key of a request body must be one the endpoint reads: a misspelt key is named as such
+// (`{"valu": 1}` -> unknown field 'valu'), not reported as some other field missing.
+void known_fields(const json& body, std::string_view path,
+                  std::initializer_list<std::string_view> keys) {
+  if (!body.is_object()) throw BadRequest("the request body must be a JSON object");
+  for (auto it = body.begin(); it != body.end(); ++it) {
+    if (std::find(keys.begin(), keys.end(), it.key()) != keys.end()) continue;
+    std::string known;
+    for (std::string_view k : keys) {
+      if (!known.empty()) known += ", ";
+      known += k;
+    }
+    throw BadRequest(fmt::format("unknown field '{}' ({} takes {})", printable(it.key()),
+                                 printable(path), known));
+  }
 }
 
 // Typed field access with precise errors.
@@ -227,6 +246,19 @@ json exceptions_json(Rack& rack) {
           {"modules", std::move(modules)}};
 }
 
+// Every fan's speed: the control module's CPU fan and each RIM's two zones.
+json fans_json(Rack& rack) {
+  json rims = json::array();
+  for (const auto& [rr, rim] : rack.rims()) {
+    rims.push_back({{"rim", rr},
+                    {"power_supply_fan", rim.power_supply_fan},
+                    {"power_supply_rpm", rim.power_supply_rpm},
+                    {"slot_card_fan", rim.slot_card_fan},
+                    {"slot_card_rpm", rim.slot_card_rpm}});
+  }
+  return {{"cpu_fan_rpm", rack.cpu_fan_rpm()}, {"rims", std::move(rims)}};
+}
+
 json rack_json(Rack& rack) {
   json rims = json::array();
   for (const auto& [rr, rim] : rack.rims()) {
@@ -383,7 +415,9 @@ std::optional<HttpResponse> ControlApi::check_head(const HttpRequest& req) const
 HttpResponse ControlApi::serve(const HttpRequest& req) {
   if (auto refused = check_head(req)) return *refused;
   const Response r = handle(req.method, req.path, req.body);
-  return json_response(r.status, r.body);
+  HttpResponse out = json_response(r.status, r.body);
+  if (!r.allow.empty()) out.headers.emplace_back("Allow", r.allow);
+  return out;
 }
 
 uint16_t ControlApi::listen(uint16_t port) {
@@ -496,7 +530,8 @@ ControlApi::Prepared ControlApi::prepare(std::string_view method, std::string_vi
   constexpr std::string_view kSlaves = "/api/slaves";
   if (path == kSlaves) {
     if (method != "GET") {
-      return {Response{405, {{"error", "/api/slaves does not accept " + printable(method)}}}, {}};
+      return {Response{405, {{"error", "/api/slaves does not accept " + printable(method)}}, "GET"},
+              {}};
     }
     json list = json::array();
     for (size_t i = 0; i < racks_.size(); ++i) {
@@ -540,21 +575,23 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
   Rack* r = &rack;
   auto answer = [](Response resp) { return Prepared{std::move(resp), {}}; };
   auto run = [](Command c) { return Prepared{std::nullopt, std::move(c)}; };
-  auto wrong_method = [&] {
-    return answer(Response{
-        405,
-        {{"error", fmt::format("{} does not accept {}", printable(path), printable(method))}}});
+  // Every endpoint takes exactly one of GET and POST: the other one is named in the answer.
+  auto wrong_method = [&](const char* accepted) {
+    return answer(Response{405,
+                           {{"error", fmt::format("{} does not accept {}; use {}", printable(path),
+                                                  printable(method), accepted)}},
+                           accepted});
   };
 
   if (path == "/api/rack") {
-    if (!get) return wrong_method();
+    if (!get) return wrong_method("GET");
     return run([r] {
       r->refresh();
       return Response{200, rack_json(*r)};
     });
   }
   if (path.starts_with("/api/modules/")) {
-    if (!get) return wrong_method();
+    if (!get) return wrong_method("GET");
     const std::string_view num = path.substr(std::string_view("/api/modules/").size());
     int n = 0;
     for (char c : num) {
@@ -570,7 +607,7 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     });
   }
   if (path == "/api/esm") {
-    if (!get) return wrong_method();
+    if (!get) return wrong_method("GET");
     return run([r] {
       return Response{200,
                       {{"state", esm_name(r->esm_state())},
@@ -579,14 +616,15 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     });
   }
   if (path == "/api/exceptions") {
-    if (!get) return wrong_method();
+    if (!get) return wrong_method("GET");
     return run([r] {
       r->refresh();
       return Response{200, exceptions_json(*r)};
     });
   }
   if (path == "/api/channel") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    known_fields(body, path, {"module", "channel", "value", "source", "params"});
     const auto module = static_cast<uint16_t>(integer(body, "module", 1, 255));
     const auto channel = static_cast<size_t>(integer(body, "channel", 0, 31));
     std::string kind;
@@ -596,6 +634,7 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
       params["value"] = param_string(field(body, "value"));
       if (body.contains("source")) throw BadRequest("give either 'value' or 'source', not both");
     } else {
+      if (!body.contains("source")) throw BadRequest("give 'value' or 'source' (with 'params')");
       kind = text(body, "source");
       if (body.contains("params")) {
         const json& p = body.at("params");
@@ -630,7 +669,10 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     });
   }
   if (path == "/api/rim/unplug" || path == "/api/rim/replug" || path == "/api/rim/state") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    if (path == "/api/rim/unplug") known_fields(body, path, {"rim", "comm_error"});
+    if (path == "/api/rim/replug") known_fields(body, path, {"rim"});
+    if (path == "/api/rim/state") known_fields(body, path, {"rim", "state", "comm_error"});
     const auto rr = static_cast<uint8_t>(integer(body, "rim", 1, 5));
     if (!rack.rims().count(rr)) throw BadRequest(fmt::format("there is no RIM {}", rr));
     RimState st = RimState::Online;
@@ -650,7 +692,8 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     });
   }
   if (path == "/api/rim/mcm") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    known_fields(body, path, {"rim", "errors"});
     const auto rr = static_cast<uint8_t>(integer(body, "rim", 1, 5));
     if (!rack.rims().count(rr)) throw BadRequest(fmt::format("there is no RIM {}", rr));
     const json& list = field(body, "errors");
@@ -668,8 +711,9 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
         bits |= rim_event::kSoutCompareMcm1;
       else
         throw BadRequest(
-            "'errors' entries are slot_machine_mcm0, sout_compare_mcm0, slot_machine_mcm1, "
-            "sout_compare_mcm1");
+            fmt::format("'errors' entry {} is not one of slot_machine_mcm0, sout_compare_mcm0, "
+                        "slot_machine_mcm1, sout_compare_mcm1",
+                        printable(e.dump())));
     }
     return run([r, rr, bits] {
       r->set_rim_mcm_errors(rr, bits);
@@ -678,18 +722,23 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     });
   }
   if (path == "/api/fan") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    known_fields(body, path, {"rim", "zone", "rpm"});
     const auto rr = static_cast<uint8_t>(integer(body, "rim", 0, 5));
     const std::string zone = body.contains("zone") ? text(body, "zone") : std::string();
     const double rpm = number(body, "rpm");
     return run([r, rr, zone, rpm] {
       r->set_fan_rpm(rr, zone, rpm);
       r->refresh();
-      return Response{200, exceptions_json(*r)};
+      // The fans as they are now, and the tree their speed feeds (guide §4.8 fan warnings).
+      json j = exceptions_json(*r);
+      j["fans"] = fans_json(*r);
+      return Response{200, j};
     });
   }
   if (path == "/api/cpu_temperature") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    known_fields(body, path, {"celsius", "immediate"});
     const double celsius = number(body, "celsius");
     const bool immediate = boolean(body, "immediate", false);
     return run([r, celsius, immediate] {
@@ -700,14 +749,15 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     });
   }
   if (path == "/api/diagnosis") {
-    if (!get) return wrong_method();
+    if (!get) return wrong_method("GET");
     return run([r] {
       r->refresh();
       return Response{200, diagnosis_json(*r)};
     });
   }
   if (path == "/api/output_fault") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    known_fields(body, path, {"module", "channel", "overload", "overtemperature"});
     const auto module = static_cast<uint16_t>(integer(body, "module", 1, 255));
     const auto channel = static_cast<size_t>(integer(body, "channel", 0, 31));
     if (!body.contains("overload") && !body.contains("overtemperature"))
@@ -726,7 +776,8 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     });
   }
   if (path == "/api/wiring_fault") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    known_fields(body, path, {"module", "channel", "fault"});
     const auto module = static_cast<uint16_t>(integer(body, "module", 1, 255));
     const auto channel = static_cast<size_t>(integer(body, "channel", 0, 31));
     const std::string f = text(body, "fault");
@@ -742,11 +793,15 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     return run([r, module, channel, fault] {
       r->set_wiring_fault(module, channel, fault);
       r->refresh();
-      return Response{200, exceptions_json(*r)};
+      // The channel's wire as it is now, and the tree the fault feeds (guide §4.7, §3.4).
+      json j = exceptions_json(*r);
+      j["module_state"] = module_json(*r, *r->driver(module));
+      return Response{200, j};
     });
   }
   if (path == "/api/sensor") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    known_fields(body, path, {"module", "channel", "open", "loop_ohms"});
     const auto module = static_cast<uint16_t>(integer(body, "module", 1, 255));
     const auto channel = static_cast<size_t>(integer(body, "channel", 0, 31));
     if (!body.contains("open") && !body.contains("loop_ohms"))
@@ -763,7 +818,8 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     });
   }
   if (path == "/api/uart/inject") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    known_fields(body, path, {"module", "channel", "text", "hex", "error", "cts"});
     const auto module = static_cast<uint16_t>(integer(body, "module", 1, 255));
     const auto channel = static_cast<size_t>(integer(body, "channel", 0, 3));
     auto* u = dynamic_cast<UartDriver*>(rack.driver(module));

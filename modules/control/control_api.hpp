@@ -27,6 +27,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include <chrono>
 #include <vector>
@@ -60,8 +61,14 @@ class ControlApi {
   // noexcept (llvm-project#54956); Response's implicit members throw nothing.
   // NOLINTNEXTLINE(bugprone-exception-escape)
   struct Response {
+    Response() = default;
+    Response(int status_code, nlohmann::json json_body, std::string allowed = {})
+        : status(status_code), body(std::move(json_body)), allow(std::move(allowed)) {}
+
     int status = 200;
     nlohmann::json body;
+    // With 405: the methods the endpoint accepts, sent as the Allow header (RFC 9110 §15.5.6).
+    std::string allow;
   };
 
   static constexpr int kMaxInFlight = 8;

@@ -150,24 +150,24 @@ class Rackcat:
 
     # --- control API (HTTP + JSON on 127.0.0.1 inside the slave's namespace) -------------
 
-    def cli(self, *args):
+    def cli(self, *args, text=False):
         """`rackcat ctl ARGS`, the command-line client, inside the namespace; returns its JSON
-        answer (or its text). Fails with the command's message on a non-zero exit."""
+        answer (`--json`), or with text=True what it prints by default. Fails with the
+        command's message on a non-zero exit."""
         cmd = self.ns.exec_prefix() + [str(RACKCAT), "ctl", "--port", str(CONTROL_PORT),
                                        "--state-dir", str(self.state_dir)]
+        if not text:
+            cmd.append("--json")
         cmd += [str(a) for a in args]
         r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                            timeout=20)
         assert r.returncode == 0, f"rackcat ctl {' '.join(map(str, args))}: exit " \
             f"{r.returncode}: {r.stderr.strip()}"
-        try:
-            return json.loads(r.stdout)
-        except json.JSONDecodeError:
-            return r.stdout  # commands that print a table (list, set without --json)
+        return r.stdout if text else json.loads(r.stdout)
 
     def module(self, number):
         """One module with live channel values (`rackcat ctl list --module N --json`)."""
-        return self.cli("list", "--module", number, "--json")
+        return self.cli("list", "--module", number)
 
     def ctl(self, method, path, body=None, expect=200):
         """One raw control API request (curl inside the namespace); returns the JSON body."""

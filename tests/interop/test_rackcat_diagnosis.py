@@ -242,7 +242,7 @@ def test_acknowledge_clear_and_overflow(rackcat):
         head, msgs = read_history(s)
         assert [m["text"] for m in msgs[-1:]] == [0x1606]
         # The history as text.
-        text = rc.cli("diag")
+        text = rc.cli("diag", text=True)
         assert "line break removed" in text and "overwrite mode" in text, text
         go(master, pysoem.INIT_STATE)
     finally:

@@ -108,8 +108,18 @@ TEST_F(ControlApiTest, InvalidRequestsGetAReasonAndChangeNothing) {
       {"POST", "/api/uart/inject", {{"module", n}, {"channel", 0}, {"text", "x"}}, "not a UART"},
       {"POST", "/api/uart/inject", {{"module", 19}, {"channel", 0}, {"hex", "abc"}}, "odd number"},
       {"POST", "/api/cpu_temperature", {{"celsius", 1000}}, "must be -55..150"},
-      {"GET", "/api/channel", nullptr, "does not accept GET"},
+      {"GET", "/api/channel", nullptr, "does not accept GET; use POST"},
       {"GET", "/api/nothing", nullptr, "no endpoint"},
+      // A misspelt key is named, not reported as another field missing (issue 23).
+      {"POST", "/api/channel", {{"valu", 1}}, "unknown field 'valu' (/api/channel takes module"},
+      {"POST", "/api/channel", {{"module", n}, {"channel", 0}}, "give 'value' or 'source'"},
+      {"POST",
+       "/api/fan",
+       {{"rim", 1}, {"rpm", 10}, {"zone", "cpu"}, {"speed", 1}},
+       "unknown field 'speed'"},
+      {"POST", "/api/rim/replug", {{"rim", 2}, {"comm_error", true}}, "unknown field 'comm_error'"},
+      {"POST", "/api/rim/mcm", {{"rim", 1}, {"errors", {"bogus"}}}, "entry \"bogus\" is not one"},
+      {"POST", "/api/wiring_fault", json::array({1}), "must be a JSON object"},
   };
   for (const Case& c : cases) {
     auto r = call(c.method, c.path, c.body);
@@ -134,6 +144,41 @@ TEST_F(ControlApiTest, InvalidRequestsGetAReasonAndChangeNothing) {
   EXPECT_EQ(bad_json.status, 400);
   EXPECT_EQ(at(1, 12).inputs()[0].source->describe(), before);
   EXPECT_EQ(obj(0x2021).get_u(8), 2u);
+}
+
+// RFC 9110 §15.5.6: a 405 names the method the endpoint accepts in Allow.
+TEST_F(ControlApiTest, WrongMethodNamesTheAcceptedOne) {
+  auto r = call("GET", "/api/wiring_fault");
+  EXPECT_EQ(r.status, 405);
+  EXPECT_EQ(r.allow, "POST");
+  r = call("POST", "/api/esm", json::object());
+  EXPECT_EQ(r.status, 405);
+  EXPECT_EQ(r.allow, "GET");
+  r = call("POST", "/api/slaves", json::object());
+  EXPECT_EQ(r.status, 405);
+  EXPECT_EQ(r.allow, "GET");
+}
+
+// Every answer to a change shows the state after it (issue 23): the value just set, the wire of
+// the faulted channel and the fan's new speed, with the exception tree they feed.
+TEST_F(ControlApiTest, AnswersShowTheStateAfterTheChange) {
+  const uint16_t ain = at(1, 12).module().number;
+  auto r = call("POST", "/api/channel", {{"module", ain}, {"channel", 2}, {"value", -2.5}});
+  ASSERT_EQ(r.status, 200) << r.body.dump();
+  EXPECT_DOUBLE_EQ(r.body["inputs"][2]["value"].get<double>(), -2.5);
+  const uint16_t sout = at(1, 1).module().number;
+  r = call("POST", "/api/wiring_fault", {{"module", sout}, {"channel", 3}, {"fault", "unsafe"}});
+  ASSERT_EQ(r.status, 200) << r.body.dump();
+  EXPECT_EQ(r.body["module_state"]["outputs"][3]["wiring_fault"], "unsafe");
+  EXPECT_DOUBLE_EQ(r.body["module_state"]["outputs"][3]["wire"].get<double>(), 1.0);
+  ASSERT_FALSE(r.body["modules"].empty());
+  EXPECT_EQ(r.body["modules"][0]["F384"], "0x00000008");  // channel 3's error bit (guide §3.4)
+  r = call("POST", "/api/wiring_fault", {{"module", sout}, {"channel", 3}, {"fault", "none"}});
+  EXPECT_EQ(r.body["module_state"]["outputs"][3]["wiring_fault"], "none");
+  EXPECT_EQ(r.body["modules"][0]["F384"], "0x00000000");
+  r = call("POST", "/api/fan", {{"rim", 1}, {"zone", "slot_card"}, {"rpm", 1200}});
+  ASSERT_EQ(r.status, 200) << r.body.dump();
+  EXPECT_DOUBLE_EQ(r.body["fans"]["rims"][0]["slot_card_rpm"].get<double>(), 1200.0);
 }
 
 TEST_F(ControlApiTest, FaultInjectionEndpoints) {
@@ -261,6 +306,12 @@ TEST_F(ControlApiTest, RefusesForeignHostOriginTokenlessAndNonJsonRequests) {
   EXPECT_EQ(status_of(ok), 200) << ok;
   EXPECT_EQ(rack.rims().at(2).state, RimState::Offline);
   EXPECT_EQ(posted, 2);
+  // A wrong method on a known endpoint: 405 with the accepted one in Allow (RFC 9110 §15.5.6).
+  const std::string wrong =
+      http_exchange(port, http_request(port, "GET", "/api/rim/unplug", "", auth));
+  EXPECT_EQ(status_of(wrong), 405) << wrong;
+  EXPECT_NE(wrong.find("Allow: POST"), std::string::npos) << wrong;
+  EXPECT_NE(wrong.find("{"), std::string::npos) << "a JSON body with the reason";
   // Every slave of the segment is reachable; an unknown one is 404.
   EXPECT_EQ(
       status_of(http_exchange(port, http_request(port, "GET", "/api/slaves/0/esm", "", auth))),
