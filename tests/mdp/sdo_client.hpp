@@ -10,7 +10,9 @@
 
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "mdp/device.hpp"
@@ -137,6 +139,36 @@ class SdoClient {
 
   Device& device_;
   uint8_t counter_ = 0;
+};
+
+// The fixture of the SDO tests: a default rack's device, brought to PREOP (ETG.1000.6 §5.6.1:
+// SDO services from PREOP on), with an SdoClient on its mailbox. `make` builds another rack;
+// `go` drives a transition the way the ESM does (request, then the state-change hook).
+class DeviceSdoTest : public ::testing::Test {
+ protected:
+  // `state_dir_name`: this test's own state directory below the gtest temporary directory.
+  explicit DeviceSdoTest(std::string state_dir_name) : state_dir_name_(std::move(state_dir_name)) {}
+
+  void SetUp() override { make(default_rack()); }
+  void make(RackConfig cfg) {
+    DeviceOptions opt;
+    opt.load_stored_parameters = false;
+    opt.state_dir = ::testing::TempDir() + "/" + state_dir_name_;
+    device = std::make_unique<Device>(std::move(cfg), opt);
+    sdo = std::make_unique<SdoClient>(*device);
+    go(coe::EsmState::PreOp);
+  }
+  void go(coe::EsmState to) {
+    const coe::EsmState from = device->state();
+    ASSERT_EQ(device->request_state(from, to), 0);
+    device->state_changed(from, to);
+  }
+
+  std::unique_ptr<Device> device;
+  std::unique_ptr<SdoClient> sdo;
+
+ private:
+  std::string state_dir_name_;
 };
 
 }  // namespace rackcat::mdp::testing

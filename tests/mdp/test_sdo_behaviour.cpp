@@ -25,24 +25,9 @@ constexpr uint32_t kModuleList = 0x06090033;
 constexpr uint32_t kNoObject = 0x06020000;
 constexpr uint32_t kSubZero = 0x06010003;
 
-class SdoBehaviour : public ::testing::Test {
+class SdoBehaviour : public testing::DeviceSdoTest {
  protected:
-  void SetUp() override { make(default_rack()); }
-  void make(RackConfig cfg) {
-    DeviceOptions opt;
-    opt.load_stored_parameters = false;
-    opt.state_dir = ::testing::TempDir() + "/sdo_behaviour";
-    device = std::make_unique<Device>(std::move(cfg), opt);
-    sdo = std::make_unique<SdoClient>(*device);
-    go(EsmState::PreOp);
-  }
-  void go(EsmState to) {
-    const EsmState from = device->state();
-    ASSERT_EQ(device->request_state(from, to), 0);
-    device->state_changed(from, to);
-  }
-  std::unique_ptr<Device> device;
-  std::unique_ptr<SdoClient> sdo;
+  SdoBehaviour() : DeviceSdoTest("sdo_behaviour") {}
 };
 
 TEST_F(SdoBehaviour, ReadsIdentityAndDeviceInformation) {

@@ -29,22 +29,9 @@ constexpr uint32_t kCpuTemperature = 0x20000F20;  // 0x2000:0F REAL
 // Default rack module 15 is the K thermocouple card (nn = 0x0E): 0x50E4:01 "Ohms[1]" UINT.
 constexpr uint32_t kOhms1 = 0x50E40110;
 
-class UserPdo : public ::testing::Test {
+class UserPdo : public testing::DeviceSdoTest {
  protected:
-  void SetUp() override { make(default_rack()); }
-  void make(RackConfig cfg) {
-    DeviceOptions opt;
-    opt.load_stored_parameters = false;
-    opt.state_dir = ::testing::TempDir() + "/user_pdo";
-    device = std::make_unique<Device>(std::move(cfg), opt);
-    sdo = std::make_unique<SdoClient>(*device);
-    go(EsmState::PreOp);
-  }
-  void go(EsmState to) {
-    const EsmState from = device->state();
-    ASSERT_EQ(device->request_state(from, to), 0);
-    device->state_changed(from, to);
-  }
+  UserPdo() : DeviceSdoTest("user_pdo") {}
   // Appends `pdo` to 0x1C13 the way masters do: subindex 0 to 0, the entry, subindex 0 to n.
   uint32_t assign_tx(uint16_t pdo) {
     const uint8_t n = static_cast<uint8_t>(sdo->read_u(0x1C13, 0));
@@ -54,8 +41,6 @@ class UserPdo : public ::testing::Test {
     if (rc != 0) sdo->write_u(0x1C13, 0, n, 1);
     return rc;
   }
-  std::unique_ptr<Device> device;
-  std::unique_ptr<SdoClient> sdo;
 };
 
 TEST_F(UserPdo, MappingIsWritableInPreopWithTheEtgAbortCodes) {

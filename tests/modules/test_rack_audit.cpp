@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "rack_fixture.hpp"
+#include "tests/support/coe_frames.hpp"
 
 namespace rackcat::modules {
 namespace {
@@ -13,28 +14,13 @@ using testing::RackTest;
 
 constexpr uint16_t kRim2Info = 0x2021;
 
-// An expedited SDO download of 4 bytes (ETG.1000.6 §5.6.2.1: command 0x23, index, subindex,
-// data) in a mailbox (ETG.1000.4 §5.5: length, address, channel, type 3 CoE, CoE header service 2);
+// An expedited 4-byte SDO download (tests/support/coe_frames.hpp) through the device's mailbox;
 // returns the SDO command byte of the reply (0x60 = done, 0x80 = abort).
 uint8_t sdo_write_u32(mdp::Device& device, uint16_t index, uint8_t sub, uint32_t value) {
   static uint8_t counter = 0;
   counter = static_cast<uint8_t>(counter % 7 + 1);
-  const uint8_t req[16] = {10,
-                           0,
-                           0,
-                           0,
-                           0,
-                           static_cast<uint8_t>(0x03 | (counter << 4)),
-                           0x00,
-                           0x20,
-                           0x23,
-                           static_cast<uint8_t>(index),
-                           static_cast<uint8_t>(index >> 8),
-                           sub,
-                           static_cast<uint8_t>(value),
-                           static_cast<uint8_t>(value >> 8),
-                           static_cast<uint8_t>(value >> 16),
-                           static_cast<uint8_t>(value >> 24)};
+  const rackcat::testing::Bytes req = rackcat::testing::coe_message(
+      counter, 2, rackcat::testing::download_expedited(index, sub, value, 4));
   uint8_t reply[128] = {};
   const size_t n = device.handle_mailbox(req, reply);
   return n >= 9 ? reply[8] : 0xFF;
