@@ -176,8 +176,13 @@ std::string describe_event(const base::Event& e, int& level, nlohmann::json& f) 
       switch (what) {
         case base::FaultWhat::WiringFault:
           f["fault"] = "wiring_fault";
+          // modules::WiringFault: 1 short to ground (safe), 2 short to supply (unsafe).
+          f["value"] = e.value;
           return fmt::format("fault injected: {} wiring fault {}", where,
-                             e.value == 0 ? "cleared" : fmt::format("{}", e.value));
+                             e.value == 0   ? "cleared"
+                             : e.value == 1 ? "safe (short to ground)"
+                             : e.value == 2 ? "unsafe (short to supply)"
+                                            : fmt::format("{}", e.value));
         case base::FaultWhat::SensorOpen:
           f["fault"] = "sensor_open";
           return fmt::format("fault injected: {} sensor {}", where, e.value ? "open" : "closed");
