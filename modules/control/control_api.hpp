@@ -61,6 +61,8 @@ class ControlApi {
   // noexcept (llvm-project#54956); Response's implicit members throw nothing.
   // NOLINTNEXTLINE(bugprone-exception-escape)
   struct Response {
+    // The same false positive on the defaulted constructor (nlohmann::json's members).
+    // NOLINTNEXTLINE(bugprone-exception-escape)
     Response() = default;
     Response(int status_code, nlohmann::json json_body, std::string allowed = {})
         : status(status_code), body(std::move(json_body)), allow(std::move(allowed)) {}
