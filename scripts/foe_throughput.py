@@ -14,6 +14,7 @@ the read of the Ack).
 import argparse
 import os
 import random
+import shlex
 import struct
 import subprocess
 import sys
@@ -51,7 +52,7 @@ def main():
         with VethNamespace() as ns:
             state = tempfile.mkdtemp(dir=tmp)
             cap = tmp / f"foe-{mbx}.pcap" if pcap else None
-            proc = SlaveProcess(ns, f"{rackcat} run --iface {{iface}} --slaves {{slaves}}", 1,
+            proc = SlaveProcess(ns, f"{shlex.quote(str(rackcat))} run --iface {{iface}} --slaves {{slaves}}", 1,
                                 ["--state-dir", state, "--no-control", "--no-pty",
                                  "--boot-mailbox-size", str(mbx)], cap, tmp / f"log-{mbx}-{time.monotonic_ns()}.txt",
                                 rt_prefix())

@@ -214,7 +214,8 @@ def main():
     build = Path(args.build_dir).resolve()
     echo = find(build, "echo_responder")
     pinger_path = find(build, "wire_pinger")
-    slave_cmd = args.slave_cmd or f"{build}/ecat_wire_slave --iface {{iface}} --slaves {{slaves}}"
+    slave_cmd = args.slave_cmd or (f"{shlex.quote(str(build / 'ecat_wire_slave'))} --iface {{iface}} "
+                                  f"--slaves {{slaves}}")
     modes = [m for m in args.modes.split(",") if m]
     per_round = max(1, args.samples // args.rounds)
 

@@ -35,7 +35,8 @@ BUILD = Path(os.environ.get("RACKCAT_BUILD_DIR", REPO / "build"))
 if not BUILD.is_absolute():
     BUILD = REPO / BUILD
 # The wire test slave (tests/ecat_wire_slave): hand-built SII, outputs looped back to inputs.
-TEST_SLAVE_CMD = f"{BUILD}/ecat_wire_slave --iface {{iface}} --slaves {{slaves}}"
+# (the path quoted: the template is split like a shell line, and a checkout path may hold spaces)
+TEST_SLAVE_CMD = f"{shlex.quote(str(BUILD / 'ecat_wire_slave'))} --iface {{iface}} --slaves {{slaves}}"
 DEFAULT_SLAVE_CMD = TEST_SLAVE_CMD
 # The rackcat_line fixture (python/, the master developers' package) runs this build's rackcat.
 os.environ.setdefault("RACKCAT_BIN", str(BUILD / "rackcat"))

@@ -15,6 +15,7 @@ import contextlib
 import json
 from pathlib import Path
 import os
+import shlex
 import shutil
 import subprocess
 import time
@@ -118,7 +119,7 @@ class Rackcat:
         if self.config:
             args += ["--config", str(self.config)]
         cap = self.tmp_path / f"rackcat{self.runs}.pcap" if self.pcap_enabled else None
-        template = f"{RACKCAT} run --iface {{iface}} --slaves {{slaves}}"
+        template = f"{shlex.quote(str(RACKCAT))} run --iface {{iface}} --slaves {{slaves}}"
         self.proc = SlaveProcess(self.ns, template, self.slaves, args, cap,
                                  self.tmp_path / f"rackcat{self.runs}.log",
                                  rt_prefix() + self.prefix)

@@ -4,6 +4,7 @@ Fusion.IO rack, from one line file (`rackcat run --line`). The identities and na
 equal the ESI's, config_map gives the sizes the ESI implies, the line reaches OP, a DO->DI
 loopback wired in the line file is seen in the process image, and the SDO information of the
 CoE terminal lists the ESI dictionary's objects."""
+import shlex
 import shutil
 import time
 import xml.etree.ElementTree as ET
@@ -51,8 +52,9 @@ def test_line_reaches_op_with_esi_identities_and_loopback(ecat_segment, tmp_path
     shutil.copy(DATA / "rackcat-test-devices.xml", work)
     shutil.copy(REPO / "examples/tiny-rack.yaml", work)
     (work / "line.yaml").write_text(LINE)
-    cmd = (f"{BUILD / 'rackcat'} run --iface {{iface}} --line {work / 'line.yaml'} --no-control "
-           f"--no-pty --state-dir {tmp_path / 'state'}")
+    q = shlex.quote  # the template is split like a shell line; paths may hold spaces
+    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --line {q(str(work / 'line.yaml'))} "
+           f"--no-control --no-pty --state-dir {q(str(tmp_path / 'state'))}")
     iface, slave = ecat_segment(slaves=5, cmd=cmd, pcap=False)
     esi = esi_devices()
     master = pysoem.Master()

@@ -2,6 +2,7 @@
 (tests/install/test_install.sh: cmake --install into a fresh prefix, then find_package), reaches
 OP under pysoem over a veth pair and its one TxPDO counts in the process image."""
 import os
+import shlex
 import subprocess
 import time
 from pathlib import Path
@@ -33,7 +34,7 @@ def go(master, state, timeout_us=2_000_000):
 
 
 def test_installed_tiny_device_reaches_op(ecat_segment, tiny_device):
-    iface, slave = ecat_segment(cmd=f"{tiny_device} --iface {{iface}}", pcap=False)
+    iface, slave = ecat_segment(cmd=f"{shlex.quote(str(tiny_device))} --iface {{iface}}", pcap=False)
     master = pysoem.Master()
     master.open(iface)
     try:
