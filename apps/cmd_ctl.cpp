@@ -52,6 +52,8 @@ struct CtlOptions {
   std::string cts;
   std::string overload;
   std::string overtemperature;
+  int bit = 0;
+  std::optional<int> bits;
 };
 
 // The first line of a small file below the state directory (no symlink followed), or "".
@@ -245,6 +247,14 @@ void print_uart(const json& m) {
 }
 
 // `rackcat ctl wiring-fault` / `fan`: the module or fan after the change, then the tree.
+// A device of a line built from its ESI (GET /api/io, docs/LINE.md "Control").
+void print_io(const json& a) {
+  std::printf("slave %d: %s\n  outputs (%d bits): %s\n  inputs  (%d bits): %s\n",
+              a.value("slave", 0), a.value("device", "").c_str(), a.value("output_bits", 0),
+              a.value("outputs", "").c_str(), a.value("input_bits", 0),
+              a.value("inputs", "").c_str());
+}
+
 void print_fault_answer(const json& a) {
   if (a.contains("module_state")) print_module(a["module_state"]);
   if (a.contains("fans")) {
@@ -390,6 +400,23 @@ void add_ctl(CLI::App& app) {
   CLI::App* dg =
       command(ctl, o, "diag", "the diagnosis history 0x10F3 as text (ETG.1020; + = acknowledged)");
   dg->callback([o] { request(*o, "GET", "/api/diagnosis", {}, print_diagnosis); });
+
+  // A device of the line built from its ESI (docs/LINE.md "Control"): its process data.
+  CLI::App* io = command(
+      ctl, o, "io", "outputs (read back) and inputs of a device from its ESI, as hex (--slave N)");
+  io->callback([o] { request(*o, "GET", "/api/io", {}, print_io); });
+  CLI::App* si =
+      command(ctl, o, "set-inputs",
+              "set input bits of a device from its ESI (--slave N): HEX [--bit B --bits N]");
+  si->add_option("HEX", o->hex, "the bits, LSB first, as hex bytes (e.g. A5)")->required();
+  si->add_option("--bit", o->bit, "first input bit (default 0)")->check(CLI::Range(0, 65535));
+  si->add_option("--bits", o->bits, "how many bits (default: all of HEX)")
+      ->check(CLI::Range(1, 8192));
+  si->callback([o] {
+    json body{{"data", o->hex}, {"bit", o->bit}};
+    if (o->bits) body["bits"] = *o->bits;
+    request(*o, "POST", "/api/io/inputs", body, print_io);
+  });
 
   CLI::App* of = command(ctl, o, "output-fault", "overload / overtemperature of an output");
   of->add_option("--module", o->module, "module number")->required();

@@ -1,7 +1,7 @@
 // `rackcat run`: the emulated rack(s) on a network interface, answering a real master.
 //
-//   rackcat run --iface IFACE [--config FILE] [--slaves N | --line FILE] [--busy-poll] [--pcap
-//   FILE]
+//   rackcat run --iface IFACE [--config FILE] [--slaves N | --line FILE | --eni FILE --esi-dir DIR]
+//               [--busy-poll] [--pcap FILE]
 //               [--state-dir DIR] [--control-port P] [--user USER] [--rim-bus can:IFACE]
 //
 // Parses the rack file, opens the raw socket (needs CAP_NET_RAW) and the capture file, drops
@@ -28,10 +28,10 @@
 
 #include "apps/commands.hpp"
 #include "apps/event_logger.hpp"
-#include "apps/line/line_file.hpp"
+#include "apps/line/io_device_adapter.hpp"
+#include "apps/line/line_loading.hpp"
 #include "apps/rack_slave/rack_loading.hpp"
 #include "apps/rack_slave/rack_slave.hpp"
-#include "device/esi_error.hpp"
 #include "device/generic_device.hpp"
 #include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
@@ -62,7 +62,7 @@ struct RunArgs {
   uint16_t boot_mailbox_size = mdp::sm::kBootMailboxSize;
   std::optional<uint32_t> foe_password;
   LogOptions log;
-  std::string line;  // a line file (docs/LINE.md): ESI devices and racks in order
+  LineSource line;  // a line file or an ENI (docs/LINE.md): ESI devices and racks in order
 };
 
 int run(const RunArgs& a) {
@@ -72,13 +72,9 @@ int run(const RunArgs& a) {
   configure_logging(a.log);
   std::optional<mdp::RackConfig> config;
   std::optional<LineFile> line_file;
-  if (!a.line.empty()) {
-    try {
-      line_file = load_line_file(a.line);
-    } catch (const device::FileError& e) {
-      std::fprintf(stderr, "%s\n", e.what());
-      return ecat::kExitUsage;
-    }
+  if (!a.line.line.empty() || !a.line.eni.empty()) {
+    line_file = load_line_or_report(a.line);
+    if (!line_file) return ecat::kExitUsage;
     for (auto& d : line_file->devices) {
       if (!d.rack) continue;
       d.rack->control.boot_mailbox_size = a.boot_mailbox_size;
@@ -106,6 +102,8 @@ int run(const RunArgs& a) {
   std::vector<ecat::Application*> line;
   std::vector<size_t> rack_position;  // line position of racks[i]
   std::vector<std::unique_ptr<device::GenericDevice>> generics;
+  std::vector<modules::ControlSlave> controlled;  // the control API's slaves, in line order
+  std::vector<std::unique_ptr<GenericIoDevice>> io_devices;
   try {
     // Channel sources of the rack file are parsed by the drivers: their errors are
     // configuration errors too (FILE:LINE).
@@ -117,11 +115,14 @@ int run(const RunArgs& a) {
           generics.push_back(std::make_unique<device::GenericDevice>(std::move(*d.esi)));
           at[i] = generics.back().get();
           line.push_back(generics.back().get());
+          io_devices.push_back(std::make_unique<GenericIoDevice>(*generics.back()));
+          controlled.push_back({nullptr, io_devices.back().get()});
         } else {
           racks.push_back(
               std::make_unique<RackSlave>(*d.rack, state, static_cast<int>(racks.size())));
           rack_position.push_back(i);
           line.push_back(racks.back().get());
+          controlled.push_back({&racks.back()->rack(), nullptr});
         }
       }
       for (const auto& w : line_file->wiring)
@@ -131,6 +132,7 @@ int run(const RunArgs& a) {
         racks.push_back(std::make_unique<RackSlave>(*config, state, i));
         rack_position.push_back(static_cast<size_t>(i));
         line.push_back(racks.back().get());
+        controlled.push_back({&racks.back()->rack(), nullptr});
       }
     }
   } catch (const mdp::ConfigError& e) {
@@ -167,8 +169,7 @@ int run(const RunArgs& a) {
     size_t g = 0, r = 0;
     for (size_t i = 0; i < line_file->devices.size(); ++i) {
       if (r < rack_position.size() && rack_position[r] == i) {
-        spdlog::info("rackcat: slave {}: rack {} (control API rack {})", i,
-                     racks[r]->device().config().source, r);
+        spdlog::info("rackcat: slave {}: rack {}", i, racks[r]->device().config().source);
         ++r;
       } else {
         const auto& d = generics[g++]->esi().description;
@@ -190,7 +191,7 @@ int run(const RunArgs& a) {
   // The control API of every slave (docs/MODULES.md "Control API"): a fresh secret in the state
   // directory (mode 0600, this user's), the port exclusively ours, and where ctl finds both.
   std::unique_ptr<modules::ControlApi> api;
-  if (!a.no_control && !racks.empty()) {
+  if (!a.no_control) {
     modules::ControlApiOptions options;
     try {
       options.token = modules::ControlApi::new_token();
@@ -199,11 +200,9 @@ int run(const RunArgs& a) {
       std::fprintf(stderr, "rackcat: --data-dir: %s\n", e.what());
       return ecat::kExitUsage;
     }
-    std::vector<modules::Rack*> all;
-    all.reserve(racks.size());
-    for (auto& r : racks) all.push_back(&r->rack());
     api = std::make_unique<modules::ControlApi>(
-        all, [&runner](std::function<void()> f) { runner.loop().post(std::move(f)); }, options);
+        controlled, [&runner](std::function<void()> f) { runner.loop().post(std::move(f)); },
+        options);
     uint16_t port = 0;
     try {
       port = api->listen(static_cast<uint16_t>(a.control_port));
@@ -277,10 +276,20 @@ void add_run(CLI::App& app) {
                                  "rack configuration (YAML); default: built-in rack");
   auto* slaves = cmd->add_option("--slaves", args->slaves, "number of slaves in the segment")
                      ->check(CLI::Range(1, 256));
-  auto* line = cmd->add_option("--line", args->line,
+  auto* line = cmd->add_option("--line", args->line.line,
                                "line file (YAML): ESI devices and racks in order (docs/LINE.md)");
   line->excludes(slaves);
   line->excludes(config);
+  auto* eni = cmd->add_option("--eni", args->line.eni,
+                              "ENI file (ETG.2100): the line a configuration tool exported");
+  auto* esi_dir = cmd->add_option("--esi-dir", args->line.esi_dir,
+                                  "directory of the ESI (and rack) files the ENI's devices are "
+                                  "looked up in by identity");
+  eni->needs(esi_dir);
+  esi_dir->needs(eni);
+  eni->excludes(slaves);
+  eni->excludes(config);
+  eni->excludes(line);
   cmd->add_flag("--busy-poll", args->busy_poll, "spin on the socket instead of blocking");
   cmd->add_option("--pcap", args->pcap, "record every frame in and out to this pcap file");
   cmd->add_option("--state-dir", args->state_dir,

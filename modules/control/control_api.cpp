@@ -322,8 +322,20 @@ std::vector<uint8_t> parse_hex(const std::string& s) {
 ControlApi::ControlApi(Rack& rack, PostFn post)
     : ControlApi(std::vector<Rack*>{&rack}, std::move(post), ControlApiOptions{}) {}
 
+namespace {
+std::vector<ControlSlave> rack_slaves(const std::vector<Rack*>& racks) {
+  std::vector<ControlSlave> out;
+  out.reserve(racks.size());
+  for (Rack* r : racks) out.push_back({r, nullptr});
+  return out;
+}
+}  // namespace
+
 ControlApi::ControlApi(std::vector<Rack*> racks, PostFn post, ControlApiOptions options)
-    : racks_(std::move(racks)),
+    : ControlApi(rack_slaves(racks), std::move(post), std::move(options)) {}
+
+ControlApi::ControlApi(std::vector<ControlSlave> slaves, PostFn post, ControlApiOptions options)
+    : slaves_(std::move(slaves)),
       post_(std::move(post)),
       options_(std::move(options)),
       alive_(std::make_shared<std::atomic<bool>>(true)) {}
@@ -534,8 +546,12 @@ ControlApi::Prepared ControlApi::prepare(std::string_view method, std::string_vi
               {}};
     }
     json list = json::array();
-    for (size_t i = 0; i < racks_.size(); ++i) {
-      list.push_back({{"slave", i}, {"modules", racks_[i]->drivers().size()}});
+    for (size_t i = 0; i < slaves_.size(); ++i) {
+      if (slaves_[i].rack) {
+        list.push_back({{"slave", i}, {"modules", slaves_[i].rack->drivers().size()}});
+      } else {
+        list.push_back({{"slave", i}, {"device", slaves_[i].io->describe()}});
+      }
     }
     return {Response{200, {{"slaves", std::move(list)}}}, {}};
   }
@@ -549,10 +565,10 @@ ControlApi::Prepared ControlApi::prepare(std::string_view method, std::string_vi
       ok = ok && c >= '0' && c <= '9';
       n = n * 10 + static_cast<size_t>(c - '0');
     }
-    if (!ok || n >= racks_.size()) {
+    if (!ok || n >= slaves_.size()) {
       return {Response{404,
                        {{"error", fmt::format("there is no slave {} (the segment has {})",
-                                              printable(num), racks_.size())}}},
+                                              printable(num), slaves_.size())}}},
               {}};
     }
     slave = n;
@@ -565,7 +581,85 @@ ControlApi::Prepared ControlApi::prepare(std::string_view method, std::string_vi
       return {Response{400, {{"error", "the request body is not valid JSON"}}}, {}};
     }
   }
-  return dispatch(*racks_[slave], method, rest, parsed);
+  if (slaves_[slave].io) return dispatch_io(slave, *slaves_[slave].io, method, rest, parsed);
+  return dispatch(*slaves_[slave].rack, method, rest, parsed);
+}
+
+namespace {
+std::string to_hex(const std::vector<uint8_t>& bytes) {
+  std::string out;
+  out.reserve(bytes.size() * 2);
+  for (uint8_t b : bytes) out += fmt::format("{:02X}", b);
+  return out;
+}
+
+json io_json(size_t slave, const IoDevice& io) {
+  const auto out = io.outputs();
+  const auto in = io.inputs();
+  return {{"slave", slave},         {"device", io.describe()},
+          {"outputs", to_hex(out)}, {"output_bits", out.size() * 8},
+          {"inputs", to_hex(in)},   {"input_bits", in.size() * 8}};
+}
+}  // namespace
+
+ControlApi::Prepared ControlApi::dispatch_io(size_t slave, IoDevice& io, std::string_view method,
+                                             std::string_view path, const json& body) {
+  auto answer = [](Response resp) { return Prepared{std::move(resp), {}}; };
+  auto bad = [&](const std::string& why) { return answer(Response{400, {{"error", why}}}); };
+  if (path == "/api/io") {
+    if (method != "GET") {
+      return answer(Response{
+          405, {{"error", "/api/io does not accept " + printable(method) + "; use GET"}}, "GET"});
+    }
+    return {std::nullopt, [slave, &io] { return Response{200, io_json(slave, io)}; }};
+  }
+  if (path == "/api/io/inputs") {
+    if (method != "POST") {
+      return answer(Response{
+          405,
+          {{"error", "/api/io/inputs does not accept " + printable(method) + "; use POST"}},
+          "POST"});
+    }
+    // {"data": "HEX", "bit": B (default 0), "bits": N (default 8 * bytes of data)}
+    known_fields(body, path, {"data", "bit", "bits"});
+    if (!body.is_object() || !body.contains("data") || !body["data"].is_string()) {
+      return bad("POST /api/io/inputs needs {\"data\": \"HEX\"} (and optionally bit, bits)");
+    }
+    const std::string hex = body["data"].get<std::string>();
+    if (hex.empty() || hex.size() % 2 != 0 || hex.size() > 2 * 1024 ||
+        hex.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos) {
+      return bad("data: \"" + printable(hex) + "\" is not 1..1024 bytes of hex");
+    }
+    std::vector<uint8_t> data(hex.size() / 2);
+    for (size_t i = 0; i < data.size(); ++i) {
+      data[i] = static_cast<uint8_t>(std::stoul(hex.substr(2 * i, 2), nullptr, 16));
+    }
+    auto count = [&](const char* key, size_t dflt) -> std::optional<size_t> {
+      if (!body.contains(key)) return dflt;
+      if (!body[key].is_number_integer() || body[key].get<int64_t>() < 0) return std::nullopt;
+      return body[key].get<size_t>();
+    };
+    const auto bit = count("bit", 0);
+    const auto bits = count("bits", data.size() * 8);
+    if (!bit || !bits || *bits == 0 || *bits > data.size() * 8) {
+      return bad("bit and bits are unsigned numbers, bits 1.." + std::to_string(data.size() * 8) +
+                 " (the bits of data)");
+    }
+    const size_t have = io.inputs().size() * 8;
+    if (*bit > have || *bits > have - *bit) {
+      return bad(fmt::format("input bits {}..{} are beyond the {} input bit(s) of slave {} ({})",
+                             *bit, *bit + *bits - 1, have, slave, io.describe()));
+    }
+    return {std::nullopt, [slave, &io, data, b = *bit, n = *bits] {
+              io.set_input_bits(b, n, data);
+              return Response{200, io_json(slave, io)};
+            }};
+  }
+  return answer(
+      Response{404,
+               {{"error", fmt::format("slave {} is {} from its ESI: it has GET /api/io and POST "
+                                      "/api/io/inputs, not {}",
+                                      slave, io.describe(), printable(path))}}});
 }
 
 ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,

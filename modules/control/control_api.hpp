@@ -17,8 +17,9 @@
 // always means nothing changed.
 //
 // `/api/...` addresses slave 0; `/api/slaves/N/...` slave N of the segment; GET /api/slaves
-// lists them. The endpoints are listed in docs/MODULES.md "Control API"; `rackcat ctl` is the
-// command-line client.
+// lists them. A slave of a line that is not a rack (modules/control/io_device.hpp) has
+// GET /api/io (its outputs and inputs) and POST /api/io/inputs only. The endpoints are listed in
+// docs/MODULES.md "Control API"; `rackcat ctl` is the command-line client.
 #pragma once
 
 #include <atomic>
@@ -33,6 +34,7 @@
 #include <vector>
 
 #include "modules/control/http_server.hpp"
+#include "modules/control/io_device.hpp"
 #include "modules/rack/rack.hpp"
 
 namespace rackcat::mdp {
@@ -52,6 +54,12 @@ struct ControlApiOptions {
   std::shared_ptr<const mdp::FileRoot> data;
   HttpLimits limits;
   std::chrono::milliseconds answer_timeout{2000};
+};
+
+// One slave of the segment: a rack, or another device of the line.
+struct ControlSlave {
+  Rack* rack = nullptr;
+  IoDevice* io = nullptr;
 };
 
 class ControlApi {
@@ -79,6 +87,8 @@ class ControlApi {
   ControlApi(Rack& rack, PostFn post);
   // The racks of a segment, slave 0 first.
   ControlApi(std::vector<Rack*> racks, PostFn post, ControlApiOptions options);
+  // The slaves of a line in line order (each exactly one of rack, io).
+  ControlApi(std::vector<ControlSlave> slaves, PostFn post, ControlApiOptions options);
   ~ControlApi();
 
   // Binds 127.0.0.1:port exclusively (0 = any free port) and serves; returns the port. Throws
@@ -109,9 +119,11 @@ class ControlApi {
   Prepared prepare(std::string_view method, std::string_view path, std::string_view body);
   Prepared dispatch(Rack& rack, std::string_view method, std::string_view path,
                     const nlohmann::json& body);
+  Prepared dispatch_io(size_t slave, IoDevice& io, std::string_view method, std::string_view path,
+                       const nlohmann::json& body);
   Response execute(Command command);
 
-  std::vector<Rack*> racks_;
+  std::vector<ControlSlave> slaves_;
   PostFn post_;
   ControlApiOptions options_;
   uint16_t port_ = 0;

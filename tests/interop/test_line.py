@@ -4,8 +4,11 @@ Fusion.IO rack, from one line file (`rackcat run --line`). The identities and na
 equal the ESI's, config_map gives the sizes the ESI implies, the line reaches OP, a DO->DI
 loopback wired in the line file is seen in the process image, and the SDO information of the
 CoE terminal lists the ESI dictionary's objects."""
+import concurrent.futures
+import json
 import shlex
 import shutil
+import subprocess
 import time
 import xml.etree.ElementTree as ET
 
@@ -101,6 +104,170 @@ def test_line_reaches_op_with_esi_identities_and_loopback(ecat_segment, tmp_path
                     break
                 time.sleep(0.002)
             assert seen == pattern, f"DI shows {seen:#x}, DO wrote {pattern:#x}"
+        master.state = pysoem.INIT_STATE
+        master.write_state()
+    finally:
+        master.close()
+    assert slave.stop() == 0, slave.log()
+
+
+def test_eni_builds_the_same_line(ecat_segment, tmp_path):
+    """The hand-written ENI of this line (tests/apps/data/test-line.eni.xml), with the ESI and
+    the rack file looked up by identity in --esi-dir, gives the same slaves: identities, names,
+    config_map sizes, OP."""
+    esi_dir = tmp_path / "esi"
+    esi_dir.mkdir()
+    shutil.copy(DATA / "rackcat-test-devices.xml", esi_dir)
+    shutil.copy(REPO / "examples/tiny-rack.yaml", esi_dir)
+    eni = REPO / "tests/apps/data/test-line.eni.xml"
+    q = shlex.quote
+    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --eni {q(str(eni))} "
+           f"--esi-dir {q(str(esi_dir))} --no-control --no-pty "
+           f"--state-dir {q(str(tmp_path / 'state'))}")
+    iface, slave = ecat_segment(slaves=5, cmd=cmd, pcap=False)
+    esi = esi_devices()
+    master = pysoem.Master()
+    master.open(iface)
+    try:
+        assert master.config_init() == 5
+        s = master.slaves
+        for pos, order in enumerate(["RC1100", "RC1008", "RC2008", "RC3102"]):
+            code, rev, name, _ = esi[order]
+            assert (s[pos].man, s[pos].id, s[pos].rev) == (0x0E1C, code, rev), pos
+            assert s[pos].name == name, (pos, s[pos].name)
+        assert (s[4].id, s[4].rev) == (0x00464E01, 0x00010009)
+        master.config_map()
+        sizes = [(len(x.output), len(x.input)) for x in s[:4]]
+        assert sizes == [(0, 0), (0, 1), (1, 0), (0, 8)], sizes
+        master.state = pysoem.SAFEOP_STATE
+        master.write_state()
+        assert master.state_check(pysoem.SAFEOP_STATE, 3_000_000) == pysoem.SAFEOP_STATE
+        cycle(master)
+        master.state = pysoem.OP_STATE
+        master.write_state()
+        deadline = time.monotonic() + 10
+        while master.state_check(pysoem.OP_STATE, 1000) != pysoem.OP_STATE:
+            cycle(master)
+            assert time.monotonic() < deadline, \
+                [(x.name, hex(x.state), hex(x.al_status)) for x in s]
+        master.state = pysoem.INIT_STATE
+        master.write_state()
+    finally:
+        master.close()
+    assert slave.stop() == 0, slave.log()
+
+
+def test_check_validates_line_and_eni_like_run(tmp_path):
+    """`rackcat check --line` / `--eni` use run's loading: a good file lists its slaves (exit
+    0), a bad one is one FILE:LINE line (exit 2) and run refuses it the same way before
+    opening any interface."""
+    work = tmp_path / "line"
+    work.mkdir()
+    shutil.copy(DATA / "rackcat-test-devices.xml", work)
+    shutil.copy(REPO / "examples/tiny-rack.yaml", work)
+    (work / "line.yaml").write_text(LINE)
+    rackcat = str(BUILD / "rackcat")
+    ok = subprocess.run([rackcat, "check", "--line", str(work / "line.yaml")],
+                        capture_output=True, text=True, timeout=60)
+    assert ok.returncode == 0, ok.stderr
+    assert "ok, 5 slave(s)" in ok.stdout
+    assert "wire: slave 2 outputs bits 0..7 -> slave 1 inputs bits 0..7" in ok.stdout
+    eni = REPO / "tests/apps/data/test-line.eni.xml"
+    ok = subprocess.run([rackcat, "check", "--eni", str(eni), "--esi-dir", str(work)],
+                        capture_output=True, text=True, timeout=60)
+    assert ok.returncode == 0, ok.stderr
+    assert "slave 3: RC3102" in ok.stdout and "8 input byte(s)" in ok.stdout
+    bad = LINE.replace("{from: do, to: di, bits: 8}", "{from: do, to: di, bits: 9}")
+    (work / "line.yaml").write_text(bad)
+    for args in (["check", "--line", str(work / "line.yaml")],
+                 ["run", "--iface", "no-such-iface", "--line", str(work / "line.yaml")]):
+        res = subprocess.run([rackcat, *args], capture_output=True, text=True, timeout=60)
+        assert res.returncode == 2, res
+        assert res.stderr.strip() == (f"{work / 'line.yaml'}:8: wire reads output bits 0..8 but "
+                                      "the device has 8 output bits"), res.stderr
+
+
+def test_every_device_of_the_line_is_reachable_through_the_control_api(ecat_segment, tmp_path):
+    """`rackcat ctl --slave N` reaches every device of the line by its line position: a DO
+    terminal's outputs read back what pysoem wrote, a DI terminal's and the CoE terminal's
+    inputs set through the API show up in pysoem's process image, the rack keeps its own
+    endpoints; the API still wants the bearer token."""
+    work = tmp_path / "line"
+    work.mkdir()
+    shutil.copy(DATA / "rackcat-test-devices.xml", work)
+    shutil.copy(REPO / "examples/tiny-rack.yaml", work)
+    (work / "line.yaml").write_text(LINE.split("wiring:")[0])  # no loopback: inputs from ctl
+    state = tmp_path / "state"
+    q = shlex.quote
+    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --line {q(str(work / 'line.yaml'))} "
+           f"--no-pty --control-port 8765 --state-dir {q(str(state))}")
+    iface, slave = ecat_segment(slaves=5, cmd=cmd, pcap=False)
+
+    def ctl(*args, expect=0):
+        r = subprocess.run(slave.ns.exec_prefix() + [str(BUILD / "rackcat"), "ctl", "--json",
+                                                     "--state-dir", str(state), *map(str, args)],
+                           capture_output=True, text=True, timeout=20)
+        assert r.returncode == expect, (args, r.returncode, r.stdout, r.stderr)
+        return json.loads(r.stdout) if expect == 0 else r.stderr
+
+    deadline = time.monotonic() + 10
+    while not (state / "control-token").exists():
+        assert time.monotonic() < deadline, slave.log()
+        time.sleep(0.05)
+    master = pysoem.Master()
+    master.open(iface)
+    try:
+        assert master.config_init() == 5
+        s = master.slaves
+        master.config_map()
+        master.state = pysoem.SAFEOP_STATE
+        master.write_state()
+        assert master.state_check(pysoem.SAFEOP_STATE, 3_000_000) == pysoem.SAFEOP_STATE
+        cycle(master)
+        master.state = pysoem.OP_STATE
+        master.write_state()
+        deadline = time.monotonic() + 10
+        while master.state_check(pysoem.OP_STATE, 1000) != pysoem.OP_STATE:
+            cycle(master)
+            assert time.monotonic() < deadline
+
+        def while_cycling(fn, *args, **kw):
+            with concurrent.futures.ThreadPoolExecutor(1) as pool:
+                future = pool.submit(fn, *args, **kw)
+                while not future.done():
+                    cycle(master)
+                    time.sleep(0.002)
+                return future.result()
+
+        listing = while_cycling(ctl, "--slave", 0, "io")
+        assert listing["device"] == "RC1100 'RC1100 EtherCAT coupler'", listing
+        # DO terminal (slave 2): outputs read back.
+        s[2].output = bytes([0x3C])
+        cycle(master, 5)
+        io = while_cycling(ctl, "--slave", 2, "io")
+        assert (io["outputs"], io["output_bits"]) == ("3C", 8), io
+        # DI terminal (slave 1): inputs set from outside reach the master.
+        io = while_cycling(ctl, "--slave", 1, "set-inputs", "A5")
+        assert io["inputs"] == "A5", io
+        cycle(master, 5)
+        assert s[1].input[0] == 0xA5
+        # CoE analog terminal (slave 3): channel 2's value (input bits 48..63) = 0x1234.
+        io = while_cycling(ctl, "--slave", 3, "set-inputs", "3412", "--bit", 48)
+        cycle(master, 5)
+        assert s[3].input[6:8] == bytes([0x34, 0x12]), s[3].input.hex()
+        # Beyond the inputs, rack endpoints on an ESI device: one precise refusal each.
+        err = while_cycling(ctl, "--slave", 1, "set-inputs", "FF", "--bit", 4, expect=2)
+        assert "input bits 4..11 are beyond the 8 input bit(s) of slave 1" in err, err
+        err = while_cycling(ctl, "--slave", 1, "esm", expect=2)
+        assert "slave 1 is RC1008" in err and "GET /api/io" in err, err
+        # The rack (slave 4) keeps its own endpoints.
+        esm = while_cycling(ctl, "--slave", 4, "esm")
+        assert esm, esm
+        # Without the token: 401.
+        r = while_cycling(subprocess.run, slave.ns.exec_prefix() + [
+            "curl", "-s", "-o", "/dev/null", "-w", "%{http_code}",
+            "http://127.0.0.1:8765/api/slaves/1/io"], capture_output=True, text=True, timeout=20)
+        assert r.stdout == "401", r
         master.state = pysoem.INIT_STATE
         master.write_state()
     finally:
