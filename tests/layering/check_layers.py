@@ -76,6 +76,7 @@ RULES = {
     "fuzz/esi": MDP + ["esi/"],
     "fuzz/ecat": ECAT + ["tests/ecat/"],
     "fuzz/modules": MDP + ["modules/", "tests/modules/"],
+    "fuzz/apps": MDP + ["ecat/", "esi/", "modules/", "device/", "apps/line/"],
 }
 OWN_AREAS = {p.split("/")[0] for p in RULES}
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([^"]+)"', re.M)
