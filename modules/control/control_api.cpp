@@ -331,7 +331,7 @@ std::vector<ControlSlave> rack_slaves(const std::vector<Rack*>& racks) {
 }
 }  // namespace
 
-ControlApi::ControlApi(std::vector<Rack*> racks, PostFn post, ControlApiOptions options)
+ControlApi::ControlApi(const std::vector<Rack*>& racks, PostFn post, ControlApiOptions options)
     : ControlApi(rack_slaves(racks), std::move(post), std::move(options)) {}
 
 ControlApi::ControlApi(std::vector<ControlSlave> slaves, PostFn post, ControlApiOptions options)

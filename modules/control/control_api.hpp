@@ -86,7 +86,7 @@ class ControlApi {
   // One rack (tests, fuzzing): no post function = commands run on the calling thread.
   ControlApi(Rack& rack, PostFn post);
   // The racks of a segment, slave 0 first.
-  ControlApi(std::vector<Rack*> racks, PostFn post, ControlApiOptions options);
+  ControlApi(const std::vector<Rack*>& racks, PostFn post, ControlApiOptions options);
   // The slaves of a line in line order (each exactly one of rack, io).
   ControlApi(std::vector<ControlSlave> slaves, PostFn post, ControlApiOptions options);
   ~ControlApi();
