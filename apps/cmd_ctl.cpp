@@ -284,7 +284,9 @@ CLI::App* command(CLI::App* ctl, const std::shared_ptr<CtlOptions>& o, const cha
 void add_ctl(CLI::App& app) {
   auto o = std::make_shared<CtlOptions>();
   CLI::App* ctl = app.add_subcommand(
-      "ctl", "inspect a running rack and inject faults through its control API (127.0.0.1)");
+      "ctl",
+      "inspect a running rack and inject faults through its control API (127.0.0.1); prints the "
+      "state after each request as text, or the API's JSON with --json");
   ctl->add_option("--port", o->port,
                   "control API port (default: the one `rackcat run` recorded, else 8765)");
   ctl->add_option("--state-dir", o->state_dir,
