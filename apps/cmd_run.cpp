@@ -13,6 +13,9 @@
 // bad configuration is one line "FILE:LINE: problem" and exit 2 (a bad channel source is
 // found once the racks are built, after the interface is opened); a missing interface or
 // permission is one line and exit 2.
+#include <sys/resource.h>
+
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -104,6 +107,16 @@ int run(const RunArgs& a) {
   std::vector<std::unique_ptr<device::GenericDevice>> generics;
   std::vector<modules::ControlSlave> controlled;  // the control API's slaves, in line order
   std::vector<std::unique_ptr<GenericIoDevice>> io_devices;
+  // Every slave keeps its state directory open (mdp::StateDirectory holds a descriptor): with
+  // thousands of slaves the default soft limit of 1024 descriptors is too low. Raise the soft
+  // limit as far as the hard limit allows (no privilege needed).
+  if (rlimit files{}; getrlimit(RLIMIT_NOFILE, &files) == 0) {
+    const rlim_t wanted = static_cast<rlim_t>(a.slaves) + 256;
+    if (files.rlim_cur < wanted) {
+      files.rlim_cur = std::min(files.rlim_max, wanted);
+      (void)setrlimit(RLIMIT_NOFILE, &files);
+    }
+  }
   try {
     // Channel sources of the rack file are parsed by the drivers: their errors are
     // configuration errors too (FILE:LINE).
@@ -275,7 +288,7 @@ void add_run(CLI::App& app) {
   auto* config = cmd->add_option("--config", args->config,
                                  "rack configuration (YAML); default: built-in rack");
   auto* slaves = cmd->add_option("--slaves", args->slaves, "number of slaves in the segment")
-                     ->check(CLI::Range(1, 256));
+                     ->check(CLI::Range(1, 4096));
   auto* line = cmd->add_option("--line", args->line.line,
                                "line file (YAML): ESI devices and racks in order (docs/LINE.md)");
   line->excludes(slaves);

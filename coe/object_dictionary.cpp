@@ -6,14 +6,36 @@
 #include <stdexcept>
 
 #include "coe/bits.hpp"
+#include "coe/shared_entries.hpp"
 
 namespace rackcat::coe {
 
 Object::Object(uint16_t index, ObjectCode code, std::string name, uint16_t data_type)
-    : index_(index), code_(code), name_(std::move(name)), data_type_(data_type) {}
+    : index_(index),
+      code_(code),
+      name_(std::move(name)),
+      data_type_(data_type),
+      entries_(std::make_shared<std::vector<Entry>>()) {}
+
+std::vector<Entry>& Object::writable_entries() {
+  if (entries_shared_ || entries_.use_count() > 1) {
+    entries_ = std::make_shared<std::vector<Entry>>(*entries_);
+    entries_shared_ = false;
+  }
+  // A list this object owns alone was created by make_shared of a non-const vector (in the
+  // constructor or above); shared ones were copied above.
+  return const_cast<std::vector<Entry>&>(
+      *entries_);  // NOLINT(cppcoreguidelines-pro-type-const-cast)
+}
+
+void Object::share_entries() {
+  entries_ = intern_entries(std::move(entries_));
+  entries_shared_ = true;
+}
 
 Entry& Object::add(Entry e) {
-  if (!entries_.empty() && e.subindex <= entries_.back().subindex) {
+  std::vector<Entry>& list = writable_entries();
+  if (!list.empty() && e.subindex <= list.back().subindex) {
     throw std::logic_error("object " + std::to_string(index_) + ": subindex out of order");
   }
   if (e.bit_length == 0) {
@@ -27,8 +49,8 @@ Entry& Object::add(Entry e) {
   }
   // Subindex 0 of an ARRAY/RECORD takes 16 bits in complete access (ETG.1000.6 §5.6.2.1.4).
   const bool sub0_slot = code_ != ObjectCode::Var && e.subindex == 0;
-  if (entries_.empty() || e.bit_offset == 0) {
-    uint16_t pos = entries_.empty() ? e.bit_offset : next_bit_;
+  if (list.empty() || e.bit_offset == 0) {
+    uint16_t pos = list.empty() ? e.bit_offset : next_bit_;
     // A padding entry fills the bits up to the next entry exactly (the guide's BIT1 + pad_15
     // of 0x2000:0B/0C are 16 bits together): it is never moved to a byte boundary.
     if (!packed_ && !e.padding && e.bit_length >= 8 && (pos % 8) != 0) {
@@ -40,8 +62,8 @@ Entry& Object::add(Entry e) {
   }
   next_bit_ = static_cast<uint16_t>(e.bit_offset + (sub0_slot ? 16 : e.bit_length));
   combined_access_ |= e.access;
-  entries_.push_back(std::move(e));
-  return entries_.back();
+  list.push_back(std::move(e));
+  return list.back();
 }
 
 void Object::finalize() {
@@ -51,7 +73,7 @@ void Object::finalize() {
 
 void Object::load_defaults() {
   std::fill(image_.begin(), image_.end(), 0);
-  for (const Entry& e : entries_) {
+  for (const Entry& e : *entries_) {
     if (e.default_value.empty()) {
       continue;
     }
@@ -62,23 +84,23 @@ void Object::load_defaults() {
     copy_bits(image_.data(), e.bit_offset, e.default_value.data(), 0, bits);
   }
   // An ARRAY/RECORD without a default for subindex 0 starts with all entries in use.
-  if (code_ != ObjectCode::Var && !entries_.empty() && entries_.front().subindex == 0 &&
-      entries_.front().default_value.empty() && !image_.empty()) {
+  if (code_ != ObjectCode::Var && !entries_->empty() && entries_->front().subindex == 0 &&
+      entries_->front().default_value.empty() && !image_.empty()) {
     image_[0] = max_subindex();
   }
 }
 
 const Entry* Object::entry(uint8_t subindex) const {
-  if (subindex < entries_.size() && entries_[subindex].subindex == subindex) {
-    return &entries_[subindex];
+  if (subindex < entries_->size() && (*entries_)[subindex].subindex == subindex) {
+    return &(*entries_)[subindex];
   }
-  auto it = std::lower_bound(entries_.begin(), entries_.end(), subindex,
+  auto it = std::lower_bound(entries_->begin(), entries_->end(), subindex,
                              [](const Entry& e, uint8_t s) { return e.subindex < s; });
-  return (it != entries_.end() && it->subindex == subindex) ? &*it : nullptr;
+  return (it != entries_->end() && it->subindex == subindex) ? &*it : nullptr;
 }
 
 uint8_t Object::max_subindex() const {
-  return entries_.empty() ? 0 : entries_.back().subindex;
+  return entries_->empty() ? 0 : entries_->back().subindex;
 }
 
 uint8_t Object::sub0() const {
@@ -90,7 +112,7 @@ uint8_t Object::sub0() const {
 
 size_t Object::ca_end_bit(uint8_t last) const {
   size_t end = 0;
-  for (const Entry& e : entries_) {
+  for (const Entry& e : *entries_) {
     if (e.subindex > last) {
       break;
     }
@@ -193,6 +215,7 @@ Object& ObjectDictionary::add(Object object) {
   if (object.image().size() < (object.ca_end_bit(255) + 7) / 8) {
     object.finalize();
   }
+  object.share_entries();
   const uint16_t index = object.index();
   auto [it, inserted] = objects_.emplace(index, std::move(object));
   (void)inserted;

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -59,6 +60,7 @@ struct Entry {
   uint16_t unit_type = 0;
 
   DataType type() const { return static_cast<DataType>(data_type); }
+  bool operator==(const Entry&) const = default;
   uint16_t byte_length() const { return static_cast<uint16_t>((bit_length + 7) / 8); }
 };
 
@@ -124,7 +126,10 @@ class Object {
   void set_packed(bool packed) { packed_ = packed; }
   bool packed() const { return packed_; }
 
-  const std::vector<Entry>& entries() const { return entries_; }
+  const std::vector<Entry>& entries() const { return *entries_; }
+  // Shares the entry descriptions with every other object described identically (see
+  // coe/shared_entries.hpp; ObjectDictionary::add calls it). add() afterwards copies them first.
+  void share_entries();
   const Entry* entry(uint8_t subindex) const;
   // Highest subindex defined (ETG.1000.6 "MaxSubindex" of SDO information).
   uint8_t max_subindex() const;
@@ -161,7 +166,11 @@ class Object {
   ObjectCode code_;
   std::string name_;
   uint16_t data_type_;
-  std::vector<Entry> entries_;
+  std::vector<Entry>& writable_entries();
+
+  // The descriptions, possibly shared with other objects (copy-on-write in add()).
+  std::shared_ptr<const std::vector<Entry>> entries_;
+  bool entries_shared_ = false;
   std::vector<uint8_t> image_;
   bool packed_ = false;
   uint16_t combined_access_ = 0;

@@ -90,6 +90,10 @@ struct Device::Impl {
   int64_t clock_offset_s = 0;  // clock written to 0x2000:08 minus the system clock
   bool reset_factory = false;  // the 0xFBF0 command the worker executes is a factory reset
   uint64_t last_sync_ns = 0;
+  // 0xF6F0/0xF6F2 (input latch times), looked up once when the dictionary is built: the cyclic
+  // path does no dictionary lookup (issue 16).
+  Object* input_latch_local = nullptr;
+  Object* input_latch_esc = nullptr;
   std::chrono::steady_clock::time_point last_sync_at{};
   coe::diag::History history{kDiagnosisMessages};
   // A command executed in validate_write, applied to its object in after_write.
@@ -535,6 +539,8 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.state_dir = d.dir->path();
   d.load_firmware();  // before the dictionary: the firmware's version is what it reports
   build_object_dictionary(d.config, d.od);
+  d.input_latch_local = d.od.find(0xF6F0);
+  d.input_latch_esc = d.od.find(0xF6F2);
   d.params = std::make_unique<ParameterSet>(d.od, d.config);
   d.default_payload = d.params->capture();
   d.store = std::make_unique<ParameterStore>(d.dir);
@@ -673,11 +679,11 @@ void Device::read_inputs(std::span<uint8_t> sm3) {
   Impl& d = *impl_;
   d.notify([&](CycleListener& l) { l.before_inputs(*this); });
   // 0xF6F0/0xF6F2: the input latch time of every module is this update.
-  if (Object* local = d.od.find(0xF6F0)) {
+  if (Object* local = d.input_latch_local) {
     const uint32_t now = d.uptime_us();
     for (uint8_t s = 1; s <= local->sub0(); ++s) local->set_u(s, now);
   }
-  if (Object* esc = d.od.find(0xF6F2)) {
+  if (Object* esc = d.input_latch_esc) {
     for (uint8_t s = 1; s <= esc->sub0(); ++s) esc->set_u(s, d.last_sync_ns);
   }
   d.image->read_inputs(sm3);

@@ -32,16 +32,12 @@ size_t slot_of(ParameterWriter::Job job) {
 
 }  // namespace
 
-ParameterWriter::ParameterWriter(const ParameterStore& store)
-    : store_(store), thread_([this] { run(); }) {}
+ParameterWriter::ParameterWriter(const ParameterStore& store, BackgroundWorker& worker)
+    : store_(store), worker_(worker) {}
 
 ParameterWriter::~ParameterWriter() {
-  {
-    std::lock_guard lock(mutex_);
-    stop_ = true;
-  }
-  cv_.notify_all();
-  thread_.join();
+  wait_idle();
+  worker_.forget(*this);
 }
 
 void ParameterWriter::submit(Job job, Request request) {
@@ -56,7 +52,7 @@ void ParameterWriter::submit(Job job, Request request) {
       order_.push_back(job);
     }
   }
-  cv_.notify_all();
+  worker_.schedule(*this);
 }
 
 void ParameterWriter::submit_store(uint32_t fingerprint, std::vector<uint8_t> payload) {
@@ -142,33 +138,31 @@ ParameterWriter::Result ParameterWriter::execute(Job job, const Request& r) cons
   return out;
 }
 
-void ParameterWriter::run() {
+bool ParameterWriter::run_one() {
   std::unique_lock lock(mutex_);
-  for (;;) {
-    cv_.wait(lock, [this] { return stop_ || !order_.empty(); });
-    if (order_.empty()) return;  // stop requested and nothing queued
-    const Job job = order_.front();
-    order_.pop_front();
-    Slot& s = slots_[slot_of(job)];
-    const Request request = std::move(s.request);
-    s.queued = false;
-    s.running = true;
-    lock.unlock();
-    Result result = execute(job, request);
-    if (job == Job::Store || job == Job::Reset) {  // 0xFBF2 store, 0xFBF0 factory reset
-      base::Event e{.kind = base::EventKind::Store, .code = result.ok ? uint16_t{0} : uint16_t{1}};
-      e.set_text(job == Job::Store ? "store parameters" : "reset stored parameters");
-      base::log_event(e);
-    }
-    lock.lock();
-    s.running = false;
-    // A newer request of the same kind queued meanwhile supersedes this result.
-    if (!s.queued) {
-      if (!s.result) results_.fetch_add(1, std::memory_order_acq_rel);
-      s.result = std::move(result);
-    }
-    cv_.notify_all();
+  if (order_.empty()) return false;
+  const Job job = order_.front();
+  order_.pop_front();
+  Slot& s = slots_[slot_of(job)];
+  const Request request = std::move(s.request);
+  s.queued = false;
+  s.running = true;
+  lock.unlock();
+  Result result = execute(job, request);
+  if (job == Job::Store || job == Job::Reset) {  // 0xFBF2 store, 0xFBF0 factory reset
+    base::Event e{.kind = base::EventKind::Store, .code = result.ok ? uint16_t{0} : uint16_t{1}};
+    e.set_text(job == Job::Store ? "store parameters" : "reset stored parameters");
+    base::log_event(e);
   }
+  lock.lock();
+  s.running = false;
+  // A newer request of the same kind queued meanwhile supersedes this result.
+  if (!s.queued) {
+    if (!s.result) results_.fetch_add(1, std::memory_order_acq_rel);
+    s.result = std::move(result);
+  }
+  cv_.notify_all();
+  return !order_.empty();
 }
 
 }  // namespace rackcat::mdp

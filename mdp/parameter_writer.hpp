@@ -10,6 +10,9 @@
 // Jobs run in the order they were submitted (a checksum after a store sums what was stored);
 // a job submitted again while still queued replaces its own earlier request (the latest store
 // snapshot is the one that ends up on disk).
+//
+// The work runs on the process-wide BackgroundWorker (one thread for all devices, started with
+// the first job), not on a thread per device (issue 16).
 #pragma once
 
 #include <array>
@@ -20,14 +23,14 @@
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "mdp/background_worker.hpp"
 #include "mdp/parameter_store.hpp"
 
 namespace rackcat::mdp {
 
-class ParameterWriter {
+class ParameterWriter : private BackgroundWorker::Client {
  public:
   enum class Job : uint8_t { Store, Checksum, Load, Reset };
   static constexpr size_t kJobs = 4;
@@ -39,7 +42,8 @@ class ParameterWriter {
     bool stored = false;         // Load/Reset: a valid file was read (else: none stored)
   };
 
-  explicit ParameterWriter(const ParameterStore& store);
+  explicit ParameterWriter(const ParameterStore& store,
+                           BackgroundWorker& worker = BackgroundWorker::shared());
   // Finishes what is queued, then stops.
   ~ParameterWriter();
   ParameterWriter(const ParameterWriter&) = delete;
@@ -77,16 +81,15 @@ class ParameterWriter {
   };
   void submit(Job job, Request request);
   Result execute(Job job, const Request& r) const;
-  void run();
+  bool run_one() override;
 
   const ParameterStore& store_;
+  BackgroundWorker& worker_;
   mutable std::mutex mutex_;
   std::condition_variable cv_;
-  bool stop_ = false;
   std::deque<Job> order_;
   std::array<Slot, kJobs> slots_;
   std::atomic<unsigned> results_{0};  // results set and not yet taken
-  std::thread thread_;
 };
 
 }  // namespace rackcat::mdp

@@ -4,6 +4,12 @@
 //
 //   wire_pinger --iface IFACE[,IFACE...] --frame brd|lrw [--count N] [--slaves N] [--lrw-bytes B]
 //               [--busy-poll] [--setup-fmmu] [--warmup N] [--samples-out FILE]
+//               [--frame-file FILE]
+//
+// --frame-file replays a captured frame (raw Ethernet bytes, e.g. a master's cyclic LRW frame
+// captured by scripts/op_bench.py) instead of --frame: the source MAC becomes the socket's,
+// the first datagram's index (ETG.1000.4 §5.2) counts frames, and the reported working counter
+// is the first datagram's.
 //
 // --setup-fmmu first maps B bytes of logical space per slave onto each slave's process RAM
 // (FMMU0, read/write, APWR by position) so that LRW exercises the FMMU path of a real slave.
@@ -25,6 +31,8 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -82,6 +90,26 @@ Frame build_frame(const uint8_t* src_mac, uint8_t cmd, uint16_t adp, uint16_t ad
   std::memcpy(d + 10, data.data(), data.size());
   f.wkc_offset = 16 + 10 + data.size();
   return f;
+}
+
+// A captured frame: Ethernet header, EtherCAT header, datagrams (ETG.1000.4 §5.2, Table 11:
+// length 11 bits, then 16-bit address words, length, IRQ, data, WKC).
+bool load_frame(const std::string& path, const uint8_t* src_mac, Frame& f) {
+  std::ifstream in(path, std::ios::binary);
+  f.bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (f.bytes.size() < 14 + 2 + 12 || f.bytes[12] != (kEtherTypeEcat >> 8) ||
+      f.bytes[13] != (kEtherTypeEcat & 0xFF)) {
+    std::fprintf(stderr, "wire_pinger: %s: not an EtherCAT frame\n", path.c_str());
+    return false;
+  }
+  const size_t data_len = get16(&f.bytes[16 + 6]) & 0x07FFu;
+  f.wkc_offset = 16 + 10 + data_len;
+  if (f.wkc_offset + 2 > f.bytes.size()) {
+    std::fprintf(stderr, "wire_pinger: %s: first datagram runs past the frame\n", path.c_str());
+    return false;
+  }
+  std::memcpy(&f.bytes[6], src_mac, 6);
+  return true;
 }
 
 struct Socket {
@@ -199,6 +227,7 @@ int main(int argc, char** argv) {
   bool busy = false;
   bool setup_fmmu = false;
   std::string samples_out;
+  std::string frame_file;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
@@ -220,6 +249,8 @@ int main(int argc, char** argv) {
       setup_fmmu = true;
     else if (a == "--samples-out")
       samples_out = next();
+    else if (a == "--frame-file")
+      frame_file = next();
     else {
       std::fprintf(stderr, "wire_pinger: unknown argument %s\n", a.c_str());
       return 2;
@@ -251,11 +282,16 @@ int main(int argc, char** argv) {
     s.busy = busy;
     if (!open_socket(ifaces[k], s)) return 2;
     if (setup_fmmu && !map_fmmus(s, slaves, lrw_bytes)) return 1;
-    targets[k].frame =
-        kind == "brd"
-            ? build_frame(s.mac, kCmdBrd, 0, 0x0000, std::vector<uint8_t>(2, 0))
-            : build_frame(s.mac, kCmdLrw, 0, 0,
-                          std::vector<uint8_t>(static_cast<size_t>(lrw_bytes * slaves), 0x5A));
+    if (!frame_file.empty()) {
+      if (!load_frame(frame_file, s.mac, targets[k].frame)) return 2;
+      kind = "file";
+    } else {
+      targets[k].frame =
+          kind == "brd"
+              ? build_frame(s.mac, kCmdBrd, 0, 0x0000, std::vector<uint8_t>(2, 0))
+              : build_frame(s.mac, kCmdLrw, 0, 0,
+                            std::vector<uint8_t>(static_cast<size_t>(lrw_bytes * slaves), 0x5A));
+    }
     targets[k].samples.reserve(static_cast<size_t>(count));
   }
   for (int i = 0; i < warmup + count; ++i) {

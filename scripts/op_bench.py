@@ -1,0 +1,325 @@
+#!/usr/bin/env python3
+"""rackcat in OP on the wire: cyclic LRW against the floor, SDO round trips, memory, threads.
+
+Sibling of scripts/wire_bench.py (same private namespace with two veth pairs, same floor
+bench/ecat/echo_responder and pinger bench/ecat/wire_pinger). For each slave count:
+
+  1. `rackcat run --slaves N --config examples/tiny-rack.yaml` on one pair, the floor on the
+     other; a pysoem master (config_init, config_map, process-data watchdog 0 = off so the
+     slaves stay in OP once it leaves, SAFEOP, OP) brings the slaves to OP and the master's
+     own cyclic frame (its LRW, as send_processdata puts it on the wire) is captured from a
+     packet socket on the master end. The master exits without touching the AL state.
+  2. RSS and thread count of rackcat in OP (/proc/PID/status).
+  3. wire_pinger --frame-file replays the captured frame:
+       blocking   both responders sleep in the kernel; the pinger alternates frame by frame;
+       busy-poll  both run with --busy-poll; only one spins at a time (the other is stopped with
+                  SIGSTOP), alternating rounds; the pinger blocks (2 cores).
+     The reply's working counter must be the master's expected one (pysoem expected_wkc).
+
+Then (--sdo-calls): 2,000 pysoem sdo_read of 0x1018:01 (expedited upload), blocking rackcat,
+unpinned, timed one by one in Python (time.perf_counter_ns around the call), and rackcat's CPU
+time over --idle-seconds with no traffic. Then (--brd-slaves): rackcat with that many slaves
+answering a BRD (working counter = slave count), with RSS and thread count once it answers.
+
+    sudo scripts/op_bench.py [--build-dir build] [--slaves 1,16,64,128,256]
+        [--modes blocking,busy-poll] [--samples 10000] [--sdo-calls 2000]
+        [--brd-slaves 64,128,256,4096]
+
+Prints one table; --json FILE also writes the numbers.
+"""
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import wire_bench as wb  # noqa: E402  (namespace, responders, pinger)
+
+REPO = wb.REPO
+NS = wb.NS
+
+CONFIGURE = r"""
+import socket, sys, time, pysoem
+iface, out, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
+m = pysoem.Master(); m.open(iface)
+found = m.config_init()
+if found != n: sys.exit(f"found {found} slaves, expected {n}")
+m.config_map()
+for s in m.slaves: s.set_watchdog("processdata", 0)  # 0 disables it (ETG.1000.4 6.5.3)
+m.state = pysoem.SAFEOP_STATE; m.write_state()
+if m.state_check(pysoem.SAFEOP_STATE, 10_000_000) != pysoem.SAFEOP_STATE: sys.exit("no SAFEOP")
+m.send_processdata(); m.receive_processdata(20000)
+m.state = pysoem.OP_STATE; m.write_state()
+deadline = time.monotonic() + 20
+while m.state_check(pysoem.OP_STATE, 50_000) != pysoem.OP_STATE:
+    m.send_processdata(); m.receive_processdata(20000)
+    if time.monotonic() > deadline: sys.exit("no OP")
+    m.write_state()
+# The master's cyclic frame. SOEM sends with PACKET_QDISC_BYPASS, which skips packet taps, so
+# what a socket on the master end sees is the reply: the same frame with the source-MAC bit
+# set, the inputs filled in and the working counters counted (ETG.1000.4 5.1, 5.2). Setting
+# every datagram's working counter back to 0 gives the frame the master sends (the pinger puts
+# its own source MAC in).
+cap = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(0x88A4))
+cap.bind((iface, 0x88A4)); cap.settimeout(0.5)
+wkc = 0
+for _ in range(10):
+    m.send_processdata(); wkc = m.receive_processdata(20000)
+frame = None
+for _ in range(50):
+    m.send_processdata(); wkc = m.receive_processdata(20000)
+    try:
+        while True:
+            data, addr = cap.recvfrom(2048)
+            if data[16] in (0x0A, 0x0B, 0x0C):
+                frame = bytearray(data); break
+    except socket.timeout:
+        pass
+    if frame: break
+if not frame: sys.exit("no LRW/LRD/LWR frame captured")
+pos, end = 16, 16 + (int.from_bytes(frame[14:16], "little") & 0x7FF)
+while pos + 12 <= end:  # datagrams: 10-byte header, data, 2-byte working counter
+    n = int.from_bytes(frame[pos + 6:pos + 8], "little")
+    frame[pos + 10 + (n & 0x7FF):pos + 12 + (n & 0x7FF)] = b"\0\0"
+    if not n & 0x8000: break  # no more datagrams follow
+    pos += 12 + (n & 0x7FF)
+open(out, "wb").write(frame)
+print(f"{m.expected_wkc} {wkc} {len(frame)}")
+"""
+
+SDO = r"""
+import sys, time, pysoem
+iface, calls = sys.argv[1], int(sys.argv[2])
+m = pysoem.Master(); m.open(iface)
+if m.config_init() < 1: sys.exit("no slave")
+s = m.slaves[0]
+for _ in range(50): s.sdo_read(0x1018, 1)
+t = []
+for _ in range(calls):
+    t0 = time.perf_counter_ns(); s.sdo_read(0x1018, 1); t.append(time.perf_counter_ns() - t0)
+m.close()
+print(" ".join(map(str, t)))
+"""
+
+
+def proc_status(pid):
+    fields = {}
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        k, _, v = line.partition(":")
+        fields[k] = v.strip()
+    return int(fields["VmRSS"].split()[0]), int(fields["Threads"])
+
+
+def cpu_seconds(pid):
+    parts = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(parts[11]) + int(parts[12])) / os.sysconf("SC_CLK_TCK")
+
+
+class Rackcat(wb.Responder):
+    def __init__(self, args, slaves, busy, tmp, name="slave"):
+        state = tmp / f"state-{slaves}-{int(busy)}"
+        state.mkdir(exist_ok=True)
+        cmd = [str(args.rackcat), "run", "--iface", wb.PAIRS["slave"][0], "--slaves", str(slaves),
+               "--no-control", "--no-pty", "--state-dir", str(state), "--log-level", "warn"]
+        if args.config:
+            cmd += ["--config", str(args.config)]
+        if busy:
+            cmd.append("--busy-poll")
+        super().__init__(name, cmd, tmp)
+
+
+def configure(slaves, tmp, attempts=3):
+    out = tmp / f"lrw-{slaves}.bin"
+    for _ in range(attempts):  # SOEM's scan times out now and then on a loaded machine
+        r = wb.sh("ip", "netns", "exec", NS, sys.executable, "-c", CONFIGURE,
+                  wb.PAIRS["slave"][1], str(out), str(slaves), check=False)
+        if r.returncode == 0:
+            break
+        time.sleep(1)
+    if r.returncode != 0:
+        raise RuntimeError(f"pysoem configuration of {slaves} slaves failed: "
+                           f"{r.stderr.strip()[-800:]} {r.stdout.strip()[-200:]}")
+    expected, wkc, length = map(int, r.stdout.split()[-3:])
+    return out, expected, wkc, length
+
+
+def replay(pinger_path, names, frame_file, count, tmp, warmup=100):
+    out = tmp / "samples"
+    cmd = ["ip", "netns", "exec", NS, str(pinger_path), "--iface",
+           ",".join(wb.PAIRS[n][1] for n in names), "--frame-file", str(frame_file),
+           "--count", str(count), "--warmup", str(warmup), "--samples-out", str(out)]
+    r = wb.sh(*cmd, check=False)
+    if r.returncode != 0:
+        raise RuntimeError(f"pinger failed: {r.stderr.strip()}")
+    lines = [json.loads(x) for x in r.stdout.splitlines() if x.strip()]
+    res = {}
+    for k, (name, line) in enumerate(zip(names, lines)):
+        f = out if len(names) == 1 else Path(f"{out}.{k}")
+        res[name] = ([int(x) for x in f.read_text().split()], line["lost"], line["wkc"])
+    return res
+
+
+def lrw_run(args, slaves, mode, tmp, report):
+    busy = mode == "busy-poll"
+    echo = wb.find(args.build, "echo_responder")
+    pinger = wb.find(args.build, "wire_pinger")
+    slave = Rackcat(args, slaves, busy, tmp)
+    floor = wb.Responder("floor", [str(echo), "--iface", wb.PAIRS["floor"][0]] +
+                         (["--busy-poll"] if busy else []), tmp)
+    samples = {"floor": [], "slave": []}
+    lost = {"floor": 0, "slave": 0}
+    wkcs = set()
+    try:
+        if busy:
+            floor.proc.send_signal(signal.SIGSTOP)
+        time.sleep(0.3)
+        t0 = time.monotonic()
+        frame, expected, wkc, length = configure(slaves, tmp)
+        config_s = time.monotonic() - t0
+        rss_kib, threads = proc_status(slave.proc.pid)
+        per_round = max(1, args.samples // args.rounds)
+        if not busy:
+            for _ in range(args.rounds):
+                for name, (vals, n_lost, w) in replay(pinger, ["floor", "slave"], frame,
+                                                      per_round, tmp).items():
+                    samples[name] += vals
+                    lost[name] += n_lost
+                    if name == "slave":
+                        wkcs.add(w)
+        else:
+            procs = {"floor": floor.proc, "slave": slave.proc}
+            running = "slave"
+            for rnd in range(args.rounds):
+                for name in (("floor", "slave") if rnd % 2 == 0 else ("slave", "floor")):
+                    if running != name:
+                        procs[running].send_signal(signal.SIGSTOP)
+                        procs[name].send_signal(signal.SIGCONT)
+                        running = name
+                        time.sleep(0.05)
+                    vals, n_lost, w = replay(pinger, [name], frame, per_round, tmp)[name]
+                    samples[name] += vals
+                    lost[name] += n_lost
+                    if name == "slave":
+                        wkcs.add(w)
+            for p in procs.values():
+                p.send_signal(signal.SIGCONT)
+    finally:
+        for r in (floor, slave):
+            try:
+                r.proc.send_signal(signal.SIGCONT)
+                r.stop()
+            except RuntimeError as e:
+                print(f"op_bench: {e}", file=sys.stderr)
+    f50, s50 = wb.pct(samples["floor"], 50), wb.pct(samples["slave"], 50)
+    row = {"mode": mode, "slaves": slaves, "frame_bytes": length, "expected_wkc": expected,
+           "wkc": sorted(wkcs), "config_s": round(config_s, 1), "rss_kib": rss_kib,
+           "threads": threads,
+           "floor_us": [wb.pct(samples["floor"], p) for p in (50, 90, 99)],
+           "slave_us": [wb.pct(samples["slave"], p) for p in (50, 90, 99)],
+           "ratio_p50": s50 / f50, "per_slave_ns": (s50 - f50) * 1000 / slaves,
+           "lost": lost}
+    report["lrw"].append(row)
+    print(f"{mode:9s} {slaves:5d} {length:5d} B  wkc {sorted(wkcs)} (expected {expected})  "
+          f"floor {f50:7.1f}  rackcat {s50:7.1f} us p50  x{s50 / f50:5.2f}  "
+          f"p99 {row['floor_us'][2]:7.1f} / {row['slave_us'][2]:7.1f}  "
+          f"RSS {rss_kib / 1024:6.1f} MiB ({rss_kib / slaves:7.0f} KiB/slave)  "
+          f"threads {threads}  lost {lost['floor']}/{lost['slave']}", flush=True)
+
+
+def sdo_run(args, tmp, report):
+    slave = Rackcat(args, 1, False, tmp, name="sdo")
+    try:
+        time.sleep(0.5)
+        r = wb.sh("ip", "netns", "exec", NS, sys.executable, "-c", SDO, wb.PAIRS["slave"][1],
+                  str(args.sdo_calls), check=False)
+        if r.returncode != 0:
+            raise RuntimeError(f"SDO run failed: {r.stderr.strip()[-800:]}")
+        t = [int(x) for x in r.stdout.split()]
+        time.sleep(0.5)
+        c0 = cpu_seconds(slave.proc.pid)
+        time.sleep(args.idle_seconds)
+        idle = (cpu_seconds(slave.proc.pid) - c0) / args.idle_seconds * 100
+    finally:
+        slave.stop()
+    row = {"calls": len(t), "p50_us": wb.pct(t, 50), "p90_us": wb.pct(t, 90),
+           "p99_us": wb.pct(t, 99), "mean_us": sum(t) / len(t) / 1000, "idle_cpu_pct": idle}
+    report["sdo"] = row
+    print(f"SDO upload 0x1018:01, {len(t)} calls, blocking, unpinned: p50 {row['p50_us']:.1f} "
+          f"p90 {row['p90_us']:.1f} p99 {row['p99_us']:.1f} mean {row['mean_us']:.1f} us; "
+          f"idle CPU {idle:.2f} % over {args.idle_seconds} s", flush=True)
+
+
+def brd_run(args, n, tmp, report):
+    """rackcat with n slaves, started and answering a BRD: working counter, RSS, threads."""
+    pinger = wb.find(args.build, "wire_pinger")
+    slave = Rackcat(args, n, False, tmp, name=f"brd{n}")
+    row = {"slaves": n}
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and slave.proc.poll() is None:
+            r = wb.sh("ip", "netns", "exec", NS, str(pinger), "--iface", wb.PAIRS["slave"][1],
+                      "--frame", "brd", "--count", "20", "--warmup", "0", check=False)
+            if r.returncode == 0:
+                line = json.loads(r.stdout.splitlines()[0])
+                if line["count"] > 0:
+                    row.update(wkc=line["wkc"], p50_us=line["p50_us"],
+                               start_s=round(time.monotonic() - deadline + 120, 1))
+                    row["rss_kib"], row["threads"] = proc_status(slave.proc.pid)
+                    break
+            time.sleep(0.5)
+    finally:
+        try:
+            slave.stop()
+        except RuntimeError as e:
+            row["error"] = str(e).splitlines()[-1] if str(e) else "exited"
+    report["brd"].append(row)
+    print(f"BRD with {n} slaves (INIT, tiny racks): {row}", flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--build-dir", default=str(REPO / "build"))
+    ap.add_argument("--config", default=str(REPO / "examples" / "tiny-rack.yaml"))
+    # pysoem (SOEM's EC_MAXSLAVE) configures at most 200 slaves: 199 is the largest OP run.
+    ap.add_argument("--slaves", default="1,16,64,128,199")
+    ap.add_argument("--modes", default="blocking,busy-poll")
+    ap.add_argument("--samples", type=int, default=10000)
+    ap.add_argument("--rounds", type=int, default=6)
+    ap.add_argument("--sdo-calls", type=int, default=2000, help="0 = skip")
+    ap.add_argument("--idle-seconds", type=float, default=5)
+    ap.add_argument("--brd-slaves", default="64,128,256,4096",
+                    help="slave counts for the start-up BRD / RSS / thread count run ('' = skip)")
+    ap.add_argument("--json", default=None)
+    args = ap.parse_args()
+    if os.geteuid() != 0:
+        sys.exit("op_bench: needs root (network namespace, veth pairs, raw sockets)")
+    args.build = Path(args.build_dir).resolve()
+    args.rackcat = args.build / "rackcat"
+    if not args.rackcat.exists():
+        args.rackcat = wb.find(args.build, "rackcat")
+    report = {"lrw": [], "brd": [], "started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+              "load": os.getloadavg()}
+    tmp = Path(tempfile.mkdtemp(prefix="op_bench_"))
+    wb.netns_up()
+    try:
+        for n in [int(x) for x in args.slaves.split(",") if x]:
+            for mode in [m for m in args.modes.split(",") if m]:
+                lrw_run(args, n, mode, tmp, report)
+        if args.sdo_calls > 0:
+            sdo_run(args, tmp, report)
+        for n in [int(x) for x in args.brd_slaves.split(",") if x]:
+            brd_run(args, n, tmp, report)
+    finally:
+        wb.netns_down()
+    if args.json:
+        Path(args.json).write_text(json.dumps(report, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
