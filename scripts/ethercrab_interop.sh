@@ -5,7 +5,13 @@
 #
 #   scripts/ethercrab_interop.sh [--slave "CMD ARGS"] [--mode rackcat|testslave]
 #                                [--sizes "1 16"] [--cycles N] [-- extra ethercrab-interop args]
+#   scripts/ethercrab_interop.sh --test-line [--cycles N]
 #
+# --test-line  the user's-own-line test (docs/LINE.md): `rackcat run --line` of coupler + 8-ch
+#           DI + 8-ch DO + CoE analog terminal (tests/device/data/rackcat-test-devices.xml) +
+#           Fusion.IO rack (examples/tiny-rack.yaml) with the DO wired to the DI; ethercrab
+#           (--mode line) checks the 5 product codes in order, maps the process data, reaches
+#           OP and sees its DO patterns come back on the DI across the two devices.
 # --slave   the slave command; the script appends `--iface IF --slaves N`. Default:
 #           `build/rackcat run` when built (mode rackcat), else the ecat test slave
 #           build/ecat_wire_slave (mode testslave: no CoE, whole output
@@ -28,6 +34,8 @@ MASTER_TIMEOUT_SECONDS=${MASTER_TIMEOUT_SECONDS:-600}
 
 slave_cmd=""
 mode=""
+test_line=0
+slaves_arg=1  # append --slaves N to the slave command (not for a line: its file says)
 sizes="1 16"
 cycles=10000
 extra=()
@@ -37,8 +45,9 @@ while [ $# -gt 0 ]; do
     --mode) mode=$2; shift 2 ;;
     --sizes) sizes=$2; shift 2 ;;
     --cycles) cycles=$2; shift 2 ;;
+    --test-line) test_line=1; shift ;;
     --) shift; extra=("$@"); break ;;
-    -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,28p' "$0"; exit 0 ;;
     *) echo "ethercrab_interop: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -57,6 +66,30 @@ for tool in ip cargo; do
     exit 1
   fi
 done
+
+line_dir=""
+if [ "$test_line" = 1 ]; then
+  line_dir=$(mktemp -d /tmp/ethercrab_line.XXXXXX)
+  cp tests/device/data/rackcat-test-devices.xml examples/tiny-rack.yaml "$line_dir/"
+  cat >"$line_dir/line.yaml" <<'LINE'
+devices:
+  - {esi: rackcat-test-devices.xml, device: RC1100}
+  - {esi: rackcat-test-devices.xml, device: RC1008, name: di}
+  - {esi: rackcat-test-devices.xml, device: RC2008, name: do}
+  - {esi: rackcat-test-devices.xml, device: RC3102}
+  - {rack: tiny-rack.yaml}
+wiring:
+  - {from: do, to: di, bits: 8}
+LINE
+  slave_cmd="$BUILD_DIR/rackcat run --no-pty --no-control --state-dir $line_dir/state --line $line_dir/line.yaml"
+  mode=line
+  sizes=5
+  slaves_arg=0
+  # Concatenated images in line order: the DO's 8 output bits are bits 0..7 of all outputs,
+  # the DI's 8 input bits are bits 0..7 of all inputs.
+  extra=(--wire 0:0,1:1,2:2,3:3,4:4,5:5,6:6,7:7
+    --expect-products 0x1100,0x1008,0x2008,0x3102,0x00464E01 "${extra[@]}")
+fi
 
 if [ -z "$slave_cmd" ]; then
   if [ -x "$BUILD_DIR/rackcat" ] && "$BUILD_DIR/rackcat" run --help >/dev/null 2>&1; then
@@ -109,8 +142,11 @@ cleanup() {
     ip netns del "$ns" 2>/dev/null || true
     ns=""
   fi
+  if [ -n "$line_dir" ] && [ "${1:-}" = final ]; then
+    rm -rf "$line_dir"
+  fi
 }
-trap cleanup EXIT
+trap 'cleanup final' EXIT
 trap 'exit 130' INT TERM
 
 failed=0
@@ -131,9 +167,11 @@ for n in $sizes; do
 
   slave_log="$logdir/slave-$n.log"
   master_log="$logdir/ethercrab-$n.log"
-  echo "ethercrab_interop: [$n slave(s)] $slave_cmd --iface $if_slave --slaves $n"
+  count=()
+  [ "$slaves_arg" = 1 ] && count=(--slaves "$n")
+  echo "ethercrab_interop: [$n slave(s)] $slave_cmd --iface $if_slave ${count[*]}"
   # shellcheck disable=SC2086  # the slave command is a command line on purpose
-  ip netns exec "$ns" "${rt[@]}" $slave_cmd --iface "$if_slave" --slaves "$n" >"$slave_log" 2>&1 &
+  ip netns exec "$ns" "${rt[@]}" $slave_cmd --iface "$if_slave" "${count[@]}" >"$slave_log" 2>&1 &
   slave_pid=$!
 
   # The slave is up when its raw socket is open on the interface (it shows in the

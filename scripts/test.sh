@@ -57,7 +57,11 @@ do_pysoem() {
   # pytest exits 5 when it collected no test at all: that is a failure here too.
   "$PY" -m pytest -q tests/interop -p no:cacheprovider
 }
-do_ethercrab() { bash scripts/ethercrab_interop.sh; }
+do_ethercrab() {
+  bash scripts/ethercrab_interop.sh
+  # the user's own line (docs/LINE.md): coupler, DI, DO, CoE terminal, rack; DO->DI wired
+  bash scripts/ethercrab_interop.sh --test-line --cycles 2000
+}
 do_conformance() {
   . scripts/python.sh
   # the conformance matrix: every master on every rack (tests/conformance, docs/INTEROP.md)

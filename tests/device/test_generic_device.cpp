@@ -50,5 +50,23 @@ TEST(GenericDevice, SiiServed) {
   EXPECT_EQ(dev.process_data_sizes().outputs, 0);
 }
 
+// ETG.2010 §2: the categories start at word 0x40 and end with 0xFFFF within the EEPROM size of
+// word 0x3E ((value + 1) Kbit); a master walks them up to that size (ethercrab does).
+TEST(GenericDevice, SiiCategoriesEndWithinTheEepromSize) {
+  for (const char* name : {"RC1100", "RC1008", "RC2008", "RC3102", "RC4004"}) {
+    GenericDevice dev(load_esi_device(kFile, DeviceSelector::named(name)));
+    const auto sii = dev.eeprom();
+    auto word = [&](size_t w) { return static_cast<uint16_t>(sii[2 * w] | (sii[2 * w + 1] << 8)); };
+    const size_t size_bytes = (static_cast<size_t>(word(0x3E)) + 1) * 1024 / 8;
+    EXPECT_EQ(size_bytes, sii.size()) << name;
+    size_t w = 0x40;
+    while (2 * w + 4 <= size_bytes && word(w) != 0xFFFF) w += 2 + word(w + 1);
+    EXPECT_LT(2 * w + 1, size_bytes) << name << ": no end marker within " << size_bytes;
+    if (2 * w + 1 < size_bytes) {
+      EXPECT_EQ(word(w), 0xFFFF) << name;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rackcat::device

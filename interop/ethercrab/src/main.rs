@@ -207,6 +207,9 @@ fn check_sii(i: usize, sd: &SubDevice, info: &SiiInfo, o: &Options, r: &mut Repo
         (sii::CAT_FMMU, "FMMU"),
         (sii::CAT_SYNCM, "SyncM"),
     ] {
+        if o.mode == Mode::Line && (kind == sii::CAT_FMMU || kind == sii::CAT_SYNCM) {
+            continue; // a coupler without process data has neither
+        }
         r.check(
             info.has(kind),
             format!("{tag}: has the {name} category ({kind})"),
@@ -218,6 +221,11 @@ fn check_sii(i: usize, sd: &SubDevice, info: &SiiInfo, o: &Options, r: &mut Repo
         "{tag}: SM types {sm_types:?} (1 mbx out, 2 mbx in, 3 outputs, 4 inputs), FMMU usage {:?} (1 out, 2 in, 3 SM status)",
         info.fmmu_usage
     ));
+    if o.mode == Mode::Line {
+        // A coupler has no process data, a DI terminal inputs only: the line's devices are
+        // checked against their own SII by the mapping below, not against a rack's layout.
+        return;
+    }
     r.check(
         info.sm_of_kind(3).is_some() && info.sm_of_kind(4).is_some(),
         format!("{tag}: SyncM category has process-data SMs of type 3 and 4 ({sm_types:?})"),
@@ -230,6 +238,7 @@ fn check_sii(i: usize, sd: &SubDevice, info: &SiiInfo, o: &Options, r: &mut Repo
         ),
     );
     match o.mode {
+        Mode::Line => {}
         Mode::Rackcat => {
             r.check(
                 info.mailbox_protocols() & 0x04 != 0,
@@ -772,9 +781,22 @@ macro_rules! cycle_loop {
         let t0 = Instant::now();
         for cycle in 0..$o.cycles {
             let start = Instant::now();
-            for (sd, chk) in $group.iter($md).zip($checks.iter_mut()) {
-                let mut out = sd.outputs_raw_mut();
-                chk.drive(&mut out);
+            if $o.mode == Mode::Line {
+                // The line's outputs as one image, in SubDevice order (wires cross devices).
+                let mut all = vec![0u8; $group.iter($md).map(|sd| sd.outputs_raw().len()).sum()];
+                $checks[0].drive(&mut all);
+                let mut at = 0;
+                for sd in $group.iter($md) {
+                    let mut out = sd.outputs_raw_mut();
+                    let n = out.len();
+                    out.copy_from_slice(&all[at..at + n]);
+                    at += n;
+                }
+            } else {
+                for (sd, chk) in $group.iter($md).zip($checks.iter_mut()) {
+                    let mut out = sd.outputs_raw_mut();
+                    chk.drive(&mut out);
+                }
             }
             let resp = $group
                 .$txrx($md)
@@ -800,9 +822,17 @@ macro_rules! cycle_loop {
                     ));
                 }
             }
-            for (sd, chk) in $group.iter($md).zip($checks.iter_mut()) {
-                let inp = sd.inputs_raw();
-                chk.observe(&inp, cycle);
+            if $o.mode == Mode::Line {
+                let mut all = Vec::new();
+                for sd in $group.iter($md) {
+                    all.extend_from_slice(&sd.inputs_raw());
+                }
+                $checks[0].observe(&all, cycle);
+            } else {
+                for (sd, chk) in $group.iter($md).zip($checks.iter_mut()) {
+                    let inp = sd.inputs_raw();
+                    chk.observe(&inp, cycle);
+                }
             }
             let next: Duration = $dc(&resp).unwrap_or($o.cycle_time);
             let elapsed = start.elapsed();
@@ -946,6 +976,16 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
             }
         }
     }
+    if !o.expect_products.is_empty() {
+        let got: Vec<u32> = group.iter(md).map(|sd| sd.identity().product_id).collect();
+        r.check(
+            got == o.expect_products,
+            format!(
+                "product codes in line order {:x?} (expected {:x?})",
+                got, o.expect_products
+            ),
+        );
+    }
     check_states(md, &addrs, SubDeviceState::PreOp, r).await;
     check_dc_difference(md, &group, r).await;
 
@@ -984,10 +1024,12 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
         r.info(format!(
             "SubDevice {i}: process data {out_len} output bytes, {in_len} input bytes"
         ));
-        let wires = if !o.wires.is_empty() {
+        let wires = if !o.wires.is_empty() && o.mode != Mode::Line {
             o.wires.clone()
         } else {
             match o.mode {
+                // Line mode: one check over the whole line, built below.
+                Mode::Line => Vec::new(),
                 Mode::TestSlave => loopback::identity_wires(out_len, in_len),
                 Mode::Rackcat => match &layouts[i] {
                     Some(layout) => {
@@ -1021,11 +1063,31 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
             checks.push(LoopbackCheck::new(Vec::new(), o.hold_cycles, i as u64 + 1));
             continue;
         }
-        r.check(
-            !wires.is_empty(),
-            format!("SubDevice {i}: {} loopback wire(s) to check", wires.len()),
-        );
+        if o.mode != Mode::Line {
+            r.check(
+                !wires.is_empty(),
+                format!("SubDevice {i}: {} loopback wire(s) to check", wires.len()),
+            );
+        }
         checks.push(LoopbackCheck::new(wires, o.hold_cycles, i as u64 + 1));
+    }
+    if o.mode == Mode::Line {
+        // One check over the concatenated images: wires may cross SubDevices.
+        let (all_out, all_in) = (
+            out_lens.iter().sum::<usize>(),
+            in_lens.iter().sum::<usize>(),
+        );
+        if let Err(e) = loopback::validate_wires(&o.wires, all_out, all_in) {
+            r.fail(format!("line: {e}"));
+        }
+        r.check(
+            !o.wires.is_empty(),
+            format!(
+                "line: {} loopback wire(s) across the line's {all_out} output and {all_in} input bytes",
+                o.wires.len()
+            ),
+        );
+        checks = vec![LoopbackCheck::new(o.wires.clone(), o.hold_cycles, 1)];
     }
     // With SYNC0, ethercrab puts an FRMW of the DC system time (8 bytes + 12 of PDU overhead)
     // in front of the first LRW, which shortens the first datagram.

@@ -9,6 +9,10 @@ pub enum Mode {
     TestSlave,
     /// `rackcat run`: CoE, SDO information, loopback-wired DO -> DI channels.
     Rackcat,
+    /// `rackcat run --line`: devices of any kind (no CoE checks, no SM/FMMU demands beyond
+    /// what each device's SII lists); `--wire` offsets are bits of the concatenated output
+    /// and input images of all SubDevices in line order, so a wire may cross devices.
+    Line,
 }
 
 #[derive(Debug, Clone)]
@@ -29,6 +33,8 @@ pub struct Options {
     pub blocking_op: bool,
     pub expect_vendor: Option<u32>,
     pub expect_product: Option<u32>,
+    /// Line mode: the product code of every SubDevice, in line order.
+    pub expect_products: Vec<u32>,
     /// Writable string object exercised with normal and segmented SDO downloads.
     pub string_object: (u16, u8),
     pub string_value: String,
@@ -44,8 +50,12 @@ usage: ethercrab-interop --iface IFACE [options]
   --iface IFACE            network interface (raw socket; needs CAP_NET_RAW)
   --expect-slaves N        fail unless exactly N SubDevices answer
   --cycles N               process-data cycles in OP (default 10000)
-  --mode testslave|rackcat testslave: no CoE, whole output image echoed on inputs;
-                           rackcat: CoE/SDO info checks, loopback-wired DO->DI (default)
+  --mode testslave|rackcat|line
+                           testslave: no CoE, whole output image echoed on inputs;
+                           rackcat: CoE/SDO info checks, loopback-wired DO->DI (default);
+                           line: devices of any kind (rackcat run --line), --wire offsets
+                           in the concatenated images of all SubDevices (cross-device wires)
+  --expect-products P,P,.. product code of each SubDevice in order (0x.. for hex)
   --cycle-us N             cycle period in microseconds (default 1000)
   --hold N                 cycles each output pattern is held (default 4); the echo must
                            be on the inputs by the last cycle of the hold
@@ -130,6 +140,7 @@ impl Options {
             blocking_op: false,
             expect_vendor: None,
             expect_product: None,
+            expect_products: Vec::new(),
             string_object: (0x2000, 0x04),
             string_value: "10.11.12.13".to_string(),
             string_value_segmented: "10.21.32.43".to_string(),
@@ -147,7 +158,8 @@ impl Options {
                     o.mode = match value(&arg)?.as_str() {
                         "testslave" => Mode::TestSlave,
                         "rackcat" => Mode::Rackcat,
-                        m => return Err(format!("unknown mode {m} (testslave|rackcat)")),
+                        "line" => Mode::Line,
+                        m => return Err(format!("unknown mode {m} (testslave|rackcat|line)")),
                     }
                 }
                 "--cycle-us" => {
@@ -161,6 +173,12 @@ impl Options {
                 "--blocking-op" => o.blocking_op = true,
                 "--expect-vendor" => o.expect_vendor = Some(parse_u32(&value(&arg)?)?),
                 "--expect-product" => o.expect_product = Some(parse_u32(&value(&arg)?)?),
+                "--expect-products" => {
+                    o.expect_products = value(&arg)?
+                        .split(',')
+                        .map(parse_u32)
+                        .collect::<Result<Vec<_>, _>>()?
+                }
                 "--string-object" => o.string_object = parse_object(&value(&arg)?)?,
                 "--string-value" => o.string_value = value(&arg)?,
                 "--string-value-segmented" => o.string_value_segmented = value(&arg)?,

@@ -197,21 +197,33 @@ pub async fn read_sii(sd: &SubDevice, md: &MainDevice<'_>) -> Result<SiiInfo, St
     let mut w: u16 = 0x40;
     let limit_words = (info.size_bytes / 2).max(0x40) as u32;
     for _ in 0..128 {
-        if u32::from(w) + 2 > limit_words {
+        // The end marker is one word and may be the EEPROM's last (ETG.2010 §2.3); a
+        // category header is two.
+        if u32::from(w) + 1 > limit_words {
             return Err(format!(
                 "category walk ran past the EEPROM size ({} bytes) at word {w:#06x} without an end marker",
                 info.size_bytes
             ));
         }
-        let mut hdr = [0u8; 4];
-        read_exact(sd, md, w, &mut hdr)
+        let mut kind_bytes = [0u8; 2];
+        read_exact(sd, md, w, &mut kind_bytes)
             .await
-            .map_err(|e| format!("category header at word {w:#06x}: {e}"))?;
-        let kind = u16::from_le_bytes([hdr[0], hdr[1]]);
+            .map_err(|e| format!("category type at word {w:#06x}: {e}"))?;
+        let kind = u16::from_le_bytes(kind_bytes);
         if kind == CAT_END {
             return Ok(info);
         }
-        let len_words = u16::from_le_bytes([hdr[2], hdr[3]]);
+        if u32::from(w) + 2 > limit_words {
+            return Err(format!(
+                "category {kind} at word {w:#06x} has no room for its length word in the EEPROM size ({} bytes)",
+                info.size_bytes
+            ));
+        }
+        let mut len_bytes = [0u8; 2];
+        read_exact(sd, md, w + 1, &mut len_bytes)
+            .await
+            .map_err(|e| format!("category length at word {:#06x}: {e}", w + 1))?;
+        let len_words = u16::from_le_bytes(len_bytes);
         let cat = Category {
             kind,
             start_word: w + 2,
