@@ -162,6 +162,15 @@ void print_module(const json& m) {
   }
 }
 
+// A RIM's two fan zones: "power supply 3000, slot card none" (rpm, or none where it has none).
+std::string rim_fans(const json& rim) {
+  auto zone = [&](const char* has, const char* rpm) {
+    return rim[has].get<bool>() ? std::to_string(rim[rpm].get<int>()) : std::string("none");
+  };
+  return "power supply " + zone("power_supply_fan", "power_supply_rpm") + ", slot card " +
+         zone("slot_card_fan", "slot_card_rpm");
+}
+
 void print_rack(const json& r) {
   std::printf(
       "ESM %s  outputs %s  detect modules override %d  CPU %.1f degC (published %.1f)  "
@@ -170,15 +179,9 @@ void print_rack(const json& r) {
       r["detect_modules_override"].get<bool>() ? 1 : 0, r["cpu_temperature"].get<double>(),
       r["cpu_temperature_published"].get<double>(), r["cpu_fan_rpm"].get<double>());
   for (const auto& rim : r["rims"]) {
-    std::printf("RIM %d %s%s  fans: power supply %s, slot card %s\n", rim["rim"].get<int>(),
-                rim["state"].get<std::string>().c_str(),
-                rim["comm_error"].get<bool>() ? " (communication error)" : "",
-                rim["power_supply_fan"].get<bool>()
-                    ? std::to_string(rim["power_supply_rpm"].get<int>()).c_str()
-                    : "none",
-                rim["slot_card_fan"].get<bool>()
-                    ? std::to_string(rim["slot_card_rpm"].get<int>()).c_str()
-                    : "none");
+    std::printf(
+        "RIM %d %s%s  fans: %s\n", rim["rim"].get<int>(), rim["state"].get<std::string>().c_str(),
+        rim["comm_error"].get<bool>() ? " (communication error)" : "", rim_fans(rim).c_str());
   }
   for (const auto& m : r["modules"]) print_module(m);
 }
@@ -261,13 +264,7 @@ void print_fault_answer(const json& a) {
     const json& f = a["fans"];
     std::printf("CPU fan %.0f rpm\n", f["cpu_fan_rpm"].get<double>());
     for (const auto& rim : f["rims"]) {
-      std::printf("RIM %d fans: power supply %s, slot card %s\n", rim["rim"].get<int>(),
-                  rim["power_supply_fan"].get<bool>()
-                      ? std::to_string(rim["power_supply_rpm"].get<int>()).c_str()
-                      : "none",
-                  rim["slot_card_fan"].get<bool>()
-                      ? std::to_string(rim["slot_card_rpm"].get<int>()).c_str()
-                      : "none");
+      std::printf("RIM %d fans: %s\n", rim["rim"].get<int>(), rim_fans(rim).c_str());
     }
   }
   print_exceptions(a);
