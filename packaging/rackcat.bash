@@ -23,8 +23,12 @@ _rackcat() {
     fi
   done
   case $prev in
-    --config|--pcap|--state-dir|--output|-o)
+    --config|--pcap|--state-dir|--output|-o|--line|--eni|--data-dir|--token-file)
       COMPREPLY=($(compgen -f -- "$cur"))
+      return
+      ;;
+    --esi-dir)
+      COMPREPLY=($(compgen -d -- "$cur"))
       return
       ;;
     --iface|--rim-bus)
