@@ -1,6 +1,7 @@
 #include "ecat/host/event_loop.hpp"
 
 #include <poll.h>
+#include <sched.h>
 #include <sys/eventfd.h>
 #include <sys/prctl.h>
 #include <unistd.h>
@@ -143,9 +144,25 @@ int EventLoop::run_blocking() {
   // Posts and signals that arrived before run() are handled on the first pass.
   if (take_stop_signal()) return 0;
   run_posted();
+  uint64_t spin_until = 0;  // adaptive waiting: no sleep before this time (after a frame)
   while (!stop_requested_.load(std::memory_order_acquire)) {
     uint64_t now = monotonic_ns();
     fire_timers(now);
+    if (now < spin_until) {
+      // The bounded window after a frame: non-blocking receives, posts and signals checked
+      // between them, timers above; then back to sleeping in ppoll.
+      const auto frame = link_.try_receive();
+      if (!frame.empty()) {
+        handle_frame(frame);
+        spin_until = monotonic_ns() + options_.spin_after_frame_ns;
+      }
+      if (posted_pending_.load(std::memory_order_acquire)) run_posted();
+      if (g_stop_signal.load(std::memory_order_relaxed) != 0 && take_stop_signal()) break;
+      // The master may share this core: give it the CPU whenever it is runnable, so the
+      // window costs only time nobody else wants.
+      sched_yield();
+      continue;
+    }
     uint64_t deadline = timers_ != nullptr ? timers_->next_deadline_ns() : TimerSource::kNever;
     timespec timeout{};
     timespec* timeout_ptr = nullptr;
@@ -168,7 +185,12 @@ int EventLoop::run_blocking() {
     // loop does not spin on it; frames flow again when the interface comes back.
     if (fds[0].revents & (POLLIN | POLLERR)) {
       const auto frame = link_.try_receive();
-      if (!frame.empty()) handle_frame(frame);
+      if (!frame.empty()) {
+        handle_frame(frame);
+        if (options_.spin_after_frame_ns != 0) {
+          spin_until = monotonic_ns() + options_.spin_after_frame_ns;
+        }
+      }
     }
     if (fds[1].revents & POLLIN) {
       run_posted();

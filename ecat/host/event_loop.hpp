@@ -8,6 +8,11 @@
 // end run() cleanly with status 0. Two wait modes (WaitMode): Blocking sleeps in ppoll() on
 // the socket and an eventfd (post(), stop(), signals) with the next timer deadline as the
 // timeout; BusyPoll spins on non-blocking receives and checks the clock and flags between them.
+// Blocking waits adaptively (issue 16): after a frame it keeps polling without blocking for a
+// short bounded window (Options::spin_after_frame_ns, default 100 µs) before it sleeps again,
+// because masters send mailbox exchanges in bursts (an SDO upload is 5 frames back to back):
+// one wake-up per burst instead of one per frame. With no frames it sleeps (0 % idle CPU); a
+// master cycling every T costs at most spin/T extra CPU.
 //
 // Signals: a SIGINT/SIGTERM handler (SA_RESTART) records the signal and wakes the loop through
 // its eventfd. Whichever thread the kernel picks to run it, the process is not killed, so
@@ -56,6 +61,8 @@ class EventLoop {
     WaitMode wait = WaitMode::Blocking;
     PcapWriter* pcap = nullptr;   // not owned; flushed when run() returns
     bool stop_on_signals = true;  // SIGINT/SIGTERM end run()
+    // Blocking mode: after a frame, poll without sleeping this long for the next (0 = off).
+    uint64_t spin_after_frame_ns = 100'000;
   };
 
   // Installs the SIGINT/SIGTERM handler. From then on such a signal no longer kills the

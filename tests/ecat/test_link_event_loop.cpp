@@ -189,6 +189,56 @@ TEST_P(LinkEventLoop, StopBeforeRunIsNotLost) {
   EXPECT_EQ(loop.run(), 0);
 }
 
+// Adaptive waiting (blocking mode): a frame opens a window in which the loop polls without
+// sleeping. Inside that window (made long here) it still answers a burst of frames, fires its
+// timers, runs posted work and stops on request - nothing waits for the window to close.
+TEST(LinkEventLoopSpin, BurstTimerPostAndStopInsideTheWindowAfterAFrame) {
+  if (!testutil::can_open_raw_socket()) GTEST_SKIP() << "needs root or CAP_NET_RAW";
+  RawSocketLink link("lo");
+  EventLoop loop(link, {.wait = WaitMode::Blocking,
+                        .pcap = nullptr,
+                        .stop_on_signals = false,
+                        .spin_after_frame_ns = 60'000'000'000ull});
+  loop.set_frame_handler(answer);
+  const uint64_t deadline = monotonic_ns() + 3'000'000'000ull;  // safety stop, never reached
+  struct StopAt final : TimerSource {
+    EventLoop& loop;
+    uint64_t at;
+    uint64_t fired = 0;
+    StopAt(EventLoop& l, uint64_t t) : loop(l), at(t) {}
+    uint64_t next_deadline_ns() const override { return fired ? kNever : at; }
+    void on_time(uint64_t now) override {
+      fired = now;
+      loop.stop();
+    }
+  } safety(loop, deadline);
+  loop.set_timer_source(&safety);
+  std::atomic<int> replies{0};
+  std::atomic<bool> posted_ran{false};
+  std::thread master([&] {
+    RawSocketLink master_link("lo");
+    for (uint8_t tag = 0x10; tag < 0x10 + 2 * 5; tag += 2) {  // a burst of 5, like an SDO
+      auto frame = testutil::ethercat_frame(tag);
+      stamp(frame);
+      master_link.send(frame);
+      const auto reply = testutil::receive_matching(master_link, [tag](std::span<const uint8_t> f) {
+        return ours(f) && (f[6] & 0x02) && f[testutil::kFirstDataByte] == tag + 1;
+      });
+      if (!reply.empty()) replies.fetch_add(1);
+    }
+    // Still inside the window: posted work runs and stop() ends the loop.
+    loop.post([&] {
+      posted_ran.store(true);
+      loop.stop();
+    });
+  });
+  EXPECT_EQ(loop.run(), 0);
+  master.join();
+  EXPECT_EQ(replies.load(), 5);
+  EXPECT_TRUE(posted_ran.load());
+  EXPECT_EQ(safety.fired, 0u);  // stopped by the post, long before the safety timer
+}
+
 INSTANTIATE_TEST_SUITE_P(BothWaitModes, LinkEventLoop,
                          ::testing::Values(WaitMode::Blocking, WaitMode::BusyPoll),
                          [](const auto& info) {
