@@ -35,6 +35,7 @@
 #include "apps/line/line_loading.hpp"
 #include "apps/rack_slave/rack_loading.hpp"
 #include "apps/rack_slave/rack_slave.hpp"
+#include "apps/slave_link.hpp"
 #include "device/generic_device.hpp"
 #include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
@@ -213,6 +214,7 @@ int run(const RunArgs& a) {
       std::fprintf(stderr, "rackcat: --data-dir: %s\n", e.what());
       return ecat::kExitUsage;
     }
+    options.link = slave_link(segment, runner.loop());
     api = std::make_unique<modules::ControlApi>(
         controlled, [&runner](std::function<void()> f) { runner.loop().post(std::move(f)); },
         options);
@@ -237,6 +239,9 @@ int run(const RunArgs& a) {
     }
     spdlog::info("rackcat: control API on http://127.0.0.1:{} (token in {}/{})", port, state_dir,
                  modules::kTokenFileName);
+    // The web page's login URL carries the secret: printed once, on stdout only, never logged.
+    std::printf("rackcat: web page: %s\n", api->login_url().c_str());
+    std::fflush(stdout);
   }
   // RIMs on a CAN bus (docs/CAN.md): slave 0's rack follows their heartbeats and PDOs.
   std::unique_ptr<modules::canopen::ThreadedRimLink> rim_link;

@@ -617,6 +617,11 @@ const coe::diag::History& Device::diagnosis() const {
   return impl_->history;
 }
 
+void Device::reset_exceptions() {
+  impl_->clear_latched();
+  impl_->notify([&](CycleListener& l) { l.on_exception_reset(*this); });
+}
+
 uint64_t Device::diagnosis_time(bool& local) const {
   const Impl& d = *impl_;
   const auto now = std::chrono::steady_clock::now();

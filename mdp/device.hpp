@@ -119,6 +119,9 @@ class Device {
   };
   coe::diag::AddResult report_diagnosis(const DiagnosisReport& report);
   const coe::diag::History& diagnosis() const;
+  // What a master's write of 0xFBF1 does (guide, Exception Reset Command): clears the latched
+  // exception objects and tells the listeners. Device thread (the control API's clear button).
+  void reset_exceptions();
   // The DC system time (ns since 2000-01-01) extrapolated from the last SYNC0 while SYNC0 runs
   // (an event within the last second); otherwise ns since power-on and `local` = true.
   uint64_t diagnosis_time(bool& local) const;

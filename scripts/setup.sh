@@ -2,10 +2,13 @@
 # Installs what rackcat needs, from Debian's packages and PyPI. Two profiles:
 #
 #   scripts/setup.sh --demo   what scripts/demo.sh needs: the compiler, CMake, the libraries the
-#                             CLI links, iproute2, and pysoem in the project's virtual environment
+#                             CLI links, node + npm (the build bundles the web page with esbuild,
+#                             which it installs from npm itself), iproute2, and pysoem in the
+#                             project's virtual environment
 #   scripts/setup.sh          everything the tests need on top (scripts/test.sh): clang and its
 #                             tools, GoogleTest/Benchmark, tshark, QEMU with a kernel image and
-#                             busybox for the CAN VM test, pytest
+#                             busybox for the CAN VM test, pytest, chromium and web/'s npm
+#                             test tools (TypeScript, ESLint, playwright-core)
 #
 # Python packages go into a virtual environment in the checkout (.venv, created with Debian's
 # python3-venv), never into the system interpreter. Every script runs Python through
@@ -39,6 +42,7 @@ DEB_TEST=(
   tshark libxml2-utils
   qemu-system-x86 linux-image-amd64 busybox-static
   libpcap-dev python3-dev
+  chromium
 )
 PY_DEMO_PACKAGES=(pysoem)
 PY_TEST_PACKAGES=(pytest)
@@ -61,6 +65,11 @@ missing=()
 for p in "${deb[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# node and npm build the web page (web/, docs/WEB.md). Debian's nodejs + npm unless a node with
+# its npm is already there (another distribution of node ships npm inside its nodejs package).
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  missing+=(nodejs npm)
+fi
 if [ ${#missing[@]} -gt 0 ]; then
   echo "setup: installing ${#missing[@]} Debian package(s): ${missing[*]}"
   export DEBIAN_FRONTEND=noninteractive
@@ -104,5 +113,11 @@ if [ "$PROFILE" = test ] && [ -f "$ROOT/python/pyproject.toml" ] &&
   ! "$VENV/bin/python" -c "import rackcat_line" 2>/dev/null; then
   echo "setup: installing python/ (rackcat_line) into .venv"
   "$VENV/bin/python" -m pip install --disable-pip-version-check --progress-bar off -e "$ROOT/python"
+fi
+# The web page's test tools (web/package.json devDependencies: TypeScript, ESLint,
+# playwright-core driving Debian's chromium). The build alone installs only esbuild.
+if [ "$PROFILE" = test ] && [ ! -d "$ROOT/web/node_modules/playwright-core" ]; then
+  echo "setup: npm ci in web/ (the web page's lint, unit tests and browser test)"
+  (cd "$ROOT/web" && npm ci --no-audit --no-fund --loglevel=error)
 fi
 echo "setup: ok ($PROFILE profile)"

@@ -3,9 +3,11 @@
 #
 #   1. scripts/setup.sh (Debian packages + PyPI packages into .venv, idempotent)
 #   2. release build (gcc) -> GoogleTest suite under ctest, then clang-tidy over the library
-#      and app sources (scripts/tidy.sh: any finding fails)
+#      and app sources (scripts/tidy.sh: any finding fails); the web page's TypeScript: ESLint,
+#      tsc type check and its unit tests (node --test)
 #   3. wire interop against real masters over veth pairs in private network namespaces:
-#      pysoem (pytest, tests/interop), ethercrab (scripts/ethercrab_interop.sh), then the
+#      pysoem (pytest, tests/interop; test_web_page.py drives the web page in Debian's
+#      chromium headless and keeps build/web-page.png), ethercrab (scripts/ethercrab_interop.sh), then the
 #      conformance matrix (tests/conformance: pysoem, soemx, pyecm, kickcat, ebpfcat,
 #      ethercrab on three racks; rewrites docs/INTEROP.md's matrix); they skip with a message
 #      when not root
@@ -52,6 +54,13 @@ do_build() {
 }
 do_unit() { ctest --test-dir build --output-on-failure -j "$JOBS" --timeout 300; }
 do_tidy() { bash scripts/tidy.sh build; }
+do_web() {
+  cd web
+  [ -d node_modules/playwright-core ] || npm ci --no-audit --no-fund --loglevel=error
+  npm run --silent lint
+  npm run --silent typecheck
+  npm test
+}
 do_pysoem() {
   . scripts/python.sh
   # pytest exits 5 when it collected no test at all: that is a failure here too.
@@ -84,6 +93,7 @@ step "setup" do_setup
 step "release build" do_build
 step "unit tests (release)" do_unit
 step "clang-tidy" do_tidy
+step "web page: lint, types, unit tests" do_web
 if [ "${SKIP_INTEROP:-0}" != 1 ]; then
   step "interop: pysoem over veth" do_pysoem
   [ -f scripts/ethercrab_interop.sh ] && step "interop: ethercrab over veth" do_ethercrab

@@ -14,6 +14,7 @@
 #include "mdp/diagnosis_catalogue.hpp"
 #include "mdp/file_root.hpp"
 #include "modules/cards/uart_driver.hpp"
+#include "modules/control/web_assets.hpp"
 #include "modules/signals/source_factory.hpp"
 
 namespace rackcat::modules {
@@ -338,7 +339,11 @@ ControlApi::ControlApi(std::vector<ControlSlave> slaves, PostFn post, ControlApi
     : slaves_(std::move(slaves)),
       post_(std::move(post)),
       options_(std::move(options)),
-      alive_(std::make_shared<std::atomic<bool>>(true)) {}
+      alive_(std::make_shared<std::atomic<bool>>(true)),
+      session_(options_.token, options_.token.empty() ? std::string() : new_token()) {
+  racks_.reserve(slaves_.size());
+  for (const ControlSlave& s : slaves_) racks_.push_back(s.rack);
+}
 
 ControlApi::~ControlApi() {
   stop();
@@ -373,17 +378,6 @@ HttpResponse refuse(int status, const std::string& reason) {
   return json_response(status, {{"error", reason}});
 }
 
-// Constant time in the length of `expected`: the comparison does not tell how much matched.
-bool same_secret(std::string_view given, std::string_view expected) {
-  if (expected.empty()) return false;
-  unsigned diff = given.size() == expected.size() ? 0u : 1u;
-  for (size_t i = 0; i < expected.size(); ++i) {
-    diff |= static_cast<unsigned>(static_cast<uint8_t>(i < given.size() ? given[i] : 0) ^
-                                  static_cast<uint8_t>(expected[i]));
-  }
-  return diff == 0;
-}
-
 }  // namespace
 
 std::optional<HttpResponse> ControlApi::check_head(const HttpRequest& req) const {
@@ -400,16 +394,25 @@ std::optional<HttpResponse> ControlApi::check_head(const HttpRequest& req) const
       return refuse(403, "cross-origin requests are not accepted");
     }
   }
-  // The per-run secret. (A browser session for a served page would add a second accepted
-  // credential here: an HttpOnly, SameSite=Strict cookie set from a one-time login URL.)
+  // The login URL carries the per-run secret itself; WebSession::login checks it.
+  if (req.path == kLoginPath && req.method == "GET") return std::nullopt;
+  // The per-run secret (ctl, scripts) or the page's session cookie.
   const auto auth = req.header("authorization");
   constexpr std::string_view kBearer = "Bearer ";
-  if (!auth || auth->substr(0, kBearer.size()) != kBearer ||
-      !same_secret(auth->substr(kBearer.size()), options_.token)) {
+  const bool bearer = auth && auth->substr(0, kBearer.size()) == kBearer &&
+                      same_secret(auth->substr(kBearer.size()), options_.token);
+  if (!bearer && !session_.has_session(req)) {
     HttpResponse r = refuse(401, "missing or wrong token (Authorization: Bearer, see " +
-                                     std::string(kTokenFileName) + " in the state directory)");
+                                     std::string(kTokenFileName) +
+                                     " in the state directory; a browser opens the login URL "
+                                     "rackcat run printed)");
     r.headers.emplace_back("WWW-Authenticate", "Bearer");
     return r;
+  }
+  // A browser's state-changing request names its origin (Fetch §3.1 "Origin header"); one
+  // that does not is not the page's own.
+  if (!bearer && req.method == "POST" && !req.header("origin")) {
+    return refuse(403, "a POST with the session cookie must carry the page's Origin");
   }
   if (req.method != "GET" && req.method != "POST") {
     HttpResponse r = refuse(405, "only GET and POST are accepted");
@@ -426,10 +429,63 @@ std::optional<HttpResponse> ControlApi::check_head(const HttpRequest& req) const
 
 HttpResponse ControlApi::serve(const HttpRequest& req) {
   if (auto refused = check_head(req)) return *refused;
+  if (req.path == kLoginPath) return session_.login(req);
+  if (!req.path.starts_with("/api/")) return serve_page(req);
+  if (req.path == "/api/stream") {
+    if (req.method != "GET") return refuse(405, "/api/stream accepts GET only");
+    return open_stream();
+  }
   const Response r = handle(req.method, req.path, req.body);
   HttpResponse out = json_response(r.status, r.body);
   if (!r.allow.empty()) out.headers.emplace_back("Allow", r.allow);
   return out;
+}
+
+HttpResponse ControlApi::serve_page(const HttpRequest& req) const {
+  if (req.method != "GET") return refuse(405, "the page's files accept GET only");
+  const WebAsset* asset = find_web_asset(req.path);
+  if (asset == nullptr) return refuse(404, "no file " + printable(req.path));
+  HttpResponse r;
+  r.content_type = std::string(asset->content_type);
+  r.body = std::string(asset->body);
+  // The page loads only its own files and talks only to this API; no other site may frame
+  // it (its buttons inject faults).
+  r.headers.emplace_back("Content-Security-Policy",
+                         "default-src 'none'; script-src 'self'; style-src 'self'; "
+                         "img-src 'self' data:; connect-src 'self'; frame-ancestors 'none'; "
+                         "base-uri 'none'; form-action 'none'");
+  r.headers.emplace_back("X-Frame-Options", "DENY");
+  r.headers.emplace_back("Referrer-Policy", "no-referrer");
+  return r;
+}
+
+HttpResponse ControlApi::open_stream() {
+  if (streams_->fetch_add(1) >= kMaxStreams) {
+    streams_->fetch_sub(1);
+    return refuse(503, "too many open streams");
+  }
+  // The count drops when the worker lets go of the response (the stream ended).
+  auto slot =
+      std::shared_ptr<void>(nullptr, [streams = streams_](void*) { streams->fetch_sub(1); });
+  auto snapshot = std::make_shared<LiveSnapshot>(racks_);
+  HttpResponse r;
+  r.content_type = "text/event-stream";
+  r.event_period = options_.stream_period;
+  r.next_event = [this, snapshot, slot](std::string& out) {
+    if (!alive_->load()) return false;
+    const Response taken = execute([this, snapshot] {
+      // Device thread: copies numbers into the snapshot's buffers, nothing else.
+      snapshot->capture(racks_, options_.link);
+      return Response{};
+    });
+    if (taken.status != 200) {
+      out = ": busy\n\n";  // an SSE comment keeps the connection alive (HTML §9.2.6)
+      return true;
+    }
+    out = "data: " + snapshot->to_json() + "\n\n";
+    return true;
+  };
+  return r;
 }
 
 uint16_t ControlApi::listen(uint16_t port) {
@@ -712,6 +768,14 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
   if (path == "/api/exceptions") {
     if (!get) return wrong_method("GET");
     return run([r] {
+      r->refresh();
+      return Response{200, exceptions_json(*r)};
+    });
+  }
+  if (path == "/api/exceptions/clear") {
+    if (!post) return wrong_method();
+    return run([r] {
+      r->device().reset_exceptions();  // as the master's 0xFBF1
       r->refresh();
       return Response{200, exceptions_json(*r)};
     });

@@ -16,6 +16,11 @@
 // answer is 503 "nothing changed"; once taken, the client waits for its real result. So a 5xx
 // always means nothing changed.
 //
+// The web page (docs/WEB.md): `/` and its assets, GET /login?token=SECRET (sets the session
+// cookie, modules/control/web_session.hpp) and GET /api/stream (server-sent snapshots,
+// modules/control/live_snapshot.hpp). Either credential opens everything; a request with the
+// cookie must also name our own Origin when it is a POST.
+//
 // `/api/...` addresses slave 0; `/api/slaves/N/...` slave N of the segment; GET /api/slaves
 // lists them. A slave of a line that is not a rack (modules/control/io_device.hpp) has
 // GET /api/io (its outputs and inputs) and POST /api/io/inputs only. The endpoints are listed in
@@ -35,6 +40,8 @@
 
 #include "modules/control/http_server.hpp"
 #include "modules/control/io_device.hpp"
+#include "modules/control/live_snapshot.hpp"
+#include "modules/control/web_session.hpp"
 #include "modules/rack/rack.hpp"
 
 namespace rackcat::mdp {
@@ -54,6 +61,11 @@ struct ControlApiOptions {
   std::shared_ptr<const mdp::FileRoot> data;
   HttpLimits limits;
   std::chrono::milliseconds answer_timeout{2000};
+  // The ESC side of each slave for the web page's line view (device thread, no allocation);
+  // null: those fields stay 0.
+  SlaveLinkFn link;
+  // How often GET /api/stream sends a snapshot (the page wants >= 10 per second).
+  std::chrono::milliseconds stream_period{50};
 };
 
 // One slave of the segment: a rack, or another device of the line.
@@ -82,6 +94,8 @@ class ControlApi {
   };
 
   static constexpr int kMaxInFlight = 8;
+  // Open event streams (each holds one HTTP worker); more are answered 503.
+  static constexpr int kMaxStreams = 2;
 
   // One rack (tests, fuzzing): no post function = commands run on the calling thread.
   ControlApi(Rack& rack, PostFn post);
@@ -109,6 +123,8 @@ class ControlApi {
   uint64_t timed_out_requests() const { return server_ ? server_->timed_out() : 0; }
   // A fresh secret: 128 random bits (getrandom(2)) as 32 hex digits.
   static std::string new_token();
+  // The URL that logs a browser in (printed once by `rackcat run`).
+  std::string login_url() const { return WebSession::login_url(port_, options_.token); }
 
  private:
   using Command = std::function<Response()>;
@@ -122,6 +138,8 @@ class ControlApi {
   Prepared dispatch_io(size_t slave, IoDevice& io, std::string_view method, std::string_view path,
                        const nlohmann::json& body);
   Response execute(Command command);
+  HttpResponse serve_page(const HttpRequest& request) const;
+  HttpResponse open_stream();
 
   std::vector<ControlSlave> slaves_;
   PostFn post_;
@@ -130,6 +148,9 @@ class ControlApi {
   std::unique_ptr<HttpServer> server_;
   std::shared_ptr<std::atomic<bool>> alive_;
   std::atomic<int> in_flight_{0};
+  WebSession session_;
+  std::vector<Rack*> racks_;  // per slave: its rack, or null for another device (the stream)
+  std::shared_ptr<std::atomic<int>> streams_ = std::make_shared<std::atomic<int>>(0);
 };
 
 }  // namespace rackcat::modules

@@ -26,6 +26,8 @@ const char* reason_phrase(int status) {
   switch (status) {
     case 200:
       return "OK";
+    case 303:
+      return "See Other";
     case 400:
       return "Bad Request";
     case 401:
@@ -142,7 +144,7 @@ struct HttpServer::Connection {
 std::string HttpServer::serialize(const HttpResponse& r) {
   std::string out = "HTTP/1.1 " + std::to_string(r.status) + " " + reason_phrase(r.status) + "\r\n";
   out += "Content-Type: " + r.content_type + "\r\n";
-  out += "Content-Length: " + std::to_string(r.body.size()) + "\r\n";
+  if (!r.next_event) out += "Content-Length: " + std::to_string(r.body.size()) + "\r\n";
   out += "Cache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\nConnection: close\r\n";
   for (const auto& [k, v] : r.headers) {
     out += k;
@@ -153,6 +155,24 @@ std::string HttpServer::serialize(const HttpResponse& r) {
   out += "\r\n";
   out += r.body;
   return out;
+}
+
+std::string HttpServer::serialize_stream_head(const HttpResponse& r) {
+  std::string head = serialize(r);  // ends with the empty line and r.body (empty)
+  head.resize(head.size() - r.body.size());
+  return head;
+}
+
+void HttpServer::stream_events(int fd, const HttpResponse& r) {
+  if (!send_all(fd, serialize_stream_head(r))) return;
+  std::string event;
+  for (;;) {
+    event.clear();
+    if (!r.next_event(event)) return;
+    if (!event.empty() && !send_all(fd, event)) return;  // the client went away
+    std::unique_lock lock(mutex_);
+    if (stop_cv_.wait_for(lock, r.event_period, [this] { return stopping_.load(); })) return;
+  }
 }
 
 HttpServer::HttpServer(HttpLimits limits, HeadCheck head_check, Handler handler)
@@ -195,7 +215,11 @@ void HttpServer::stop() {
     const uint64_t v = 1;
     (void)!::write(wake_fd_, &v, sizeof(v));
   }
+  {
+    const std::lock_guard lock(mutex_);  // a stream between its check and its wait sees it
+  }
   cv_.notify_all();
+  stop_cv_.notify_all();
   if (io_.joinable()) io_.join();
   for (auto& w : workers_) w.join();
   workers_.clear();
@@ -366,7 +390,11 @@ void HttpServer::worker_loop() {
     ::fcntl(job.first, F_SETFL, flags & ~O_NONBLOCK);
     timeval tv{1, 0};
     ::setsockopt(job.first, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof(tv));
-    send_all(job.first, serialize(r));
+    if (r.next_event) {
+      stream_events(job.first, r);
+    } else {
+      send_all(job.first, serialize(r));
+    }
     ::shutdown(job.first, SHUT_WR);
     ::close(job.first);
   }

@@ -44,6 +44,11 @@ struct HttpResponse {
   std::string content_type = "application/json";
   std::string body;
   std::vector<std::pair<std::string, std::string>> headers;  // extra headers
+  // A server-sent event stream (WHATWG HTML §9.2) instead of a body: after the header the
+  // worker calls next_event every event_period and sends what it appends to the string, until
+  // it returns false, the client goes away or the server stops. The stream holds its worker.
+  std::function<bool(std::string&)> next_event;
+  std::chrono::milliseconds event_period{100};
 };
 
 struct HttpLimits {
@@ -75,6 +80,8 @@ class HttpServer {
   uint64_t timed_out() const { return timed_out_.load(); }
 
   static std::string serialize(const HttpResponse& r);
+  // The header of an event stream: no Content-Length, the body ends when the connection does.
+  static std::string serialize_stream_head(const HttpResponse& r);
 
  private:
   struct Connection;
@@ -83,6 +90,7 @@ class HttpServer {
   // Returns false when the connection is finished (answered or handed to a worker).
   bool on_readable(Connection& c);
   void answer_and_close(int fd, const HttpResponse& r);
+  void stream_events(int fd, const HttpResponse& r);
 
   HttpLimits limits_;
   HeadCheck head_check_;
@@ -94,6 +102,7 @@ class HttpServer {
   std::vector<std::thread> workers_;
   std::mutex mutex_;
   std::condition_variable cv_;
+  std::condition_variable stop_cv_;  // wakes event streams when the server stops
   std::deque<std::pair<int, HttpRequest>> queue_;
   std::atomic<uint64_t> refused_connections_{0};
   std::atomic<uint64_t> timed_out_{0};
