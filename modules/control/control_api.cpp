@@ -432,7 +432,11 @@ HttpResponse ControlApi::serve(const HttpRequest& req) {
   if (req.path == kLoginPath) return session_.login(req);
   if (!req.path.starts_with("/api/")) return serve_page(req);
   if (req.path == "/api/stream") {
-    if (req.method != "GET") return refuse(405, "/api/stream accepts GET only");
+    if (req.method != "GET") {
+      HttpResponse r = refuse(405, "/api/stream does not accept POST; use GET");
+      r.headers.emplace_back("Allow", "GET");
+      return r;
+    }
     return open_stream();
   }
   const Response r = handle(req.method, req.path, req.body);
@@ -773,7 +777,8 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     });
   }
   if (path == "/api/exceptions/clear") {
-    if (!post) return wrong_method();
+    if (!post) return wrong_method("POST");
+    known_fields(body, path, {});
     return run([r] {
       r->device().reset_exceptions();  // as the master's 0xFBF1
       r->refresh();

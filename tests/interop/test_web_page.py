@@ -236,6 +236,13 @@ def test_web_login_and_refusals(rackcat):
     rc.ctl("POST", "/api/rim/replug", {"rim": 2})
     assert rc.ctl("GET", "/api/exceptions")["F390"] != "0x00000000"
     assert rc.ctl("POST", "/api/exceptions/clear", {})["F390"] == "0x00000000"
+    # Streams end with their client: more than kMaxStreams (2) in a row still open.
+    for _ in range(3):
+        r = subprocess.run(rc.ns.exec_prefix() + ["curl", "-s", "-N", "--max-time", "0.3", *c,
+                                                  base + "/api/stream"],
+                           stdout=subprocess.PIPE, text=True, timeout=20)
+        assert r.stdout.startswith("data: "), r.stdout[:200]
+    time.sleep(0.3)  # the server notices a closed stream at its next event (50 ms)
     # The stream: >= 10 snapshots per second.
     r = subprocess.run(rc.ns.exec_prefix() + ["curl", "-s", "-N", "--max-time", "2", *c,
                                               base + "/api/stream"],
