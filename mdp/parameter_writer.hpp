@@ -30,7 +30,7 @@
 
 namespace rackcat::mdp {
 
-class ParameterWriter : private BackgroundWorker::Client {
+class ParameterWriter final : private BackgroundWorker::Client {
  public:
   enum class Job : uint8_t { Store, Checksum, Load, Reset };
   static constexpr size_t kJobs = 4;

@@ -3,6 +3,7 @@
 // (tests/support/allocation_counter.hpp).
 #include <fstream>
 #include <optional>
+#include <vector>
 
 #include "modules/cards/analog_scale.hpp"
 #include "tests/modules/rack_fixture.hpp"
@@ -51,4 +52,40 @@ TEST_F(RackTest, CyclicPathAllocatesNothing) {
   count.reset();
   EXPECT_EQ(allocations, 0u);
   EXPECT_NE(module_obj(at(1, 12), 0x6000, 0x2).get_u(1), 0u);
+}
+
+// The whole device path a frame takes (issue 16): SM2 bytes through the process image into
+// the objects and the drivers, then the drivers, the input latch times (0xF6F0/0xF6F2) and the
+// process image back into SM3 bytes - with the entry descriptions shared with a second device
+// of the same rack (coe/shared_entries.hpp) and the file commands on the shared worker.
+TEST_F(RackTest, DeviceProcessDataPathAllocatesNothing) {
+  if (!rackcat::testing::CountAllocations::available()) GTEST_SKIP() << "operator new is ASan's";
+  mdp::DeviceOptions options;
+  options.state_dir = ::testing::TempDir() + "noalloc_second_device";
+  options.load_stored_parameters = false;
+  mdp::Device twin(mdp::default_rack(), options);
+  const coe::Object* latch = device.dictionary().find(0xF6F0);
+  ASSERT_NE(latch, nullptr);
+  EXPECT_EQ(latch->entries().data(), twin.dictionary().find(0xF6F0)->entries().data());
+  to_op();
+  std::vector<uint8_t> outputs(device.output_bytes(), 0);
+  std::vector<uint8_t> inputs(device.input_bytes(), 0);
+  ASSERT_FALSE(outputs.empty());
+  ASSERT_FALSE(inputs.empty());
+  for (int k = 0; k < 10; ++k) {  // warm-up
+    clock += 0.001;
+    device.write_outputs(outputs);
+    device.read_inputs(inputs);
+  }
+  drain_emergencies();
+  std::optional<rackcat::testing::CountAllocations> count(std::in_place);
+  for (int k = 0; k < 5000; ++k) {
+    outputs[static_cast<size_t>(k) % outputs.size()] = static_cast<uint8_t>(k);
+    clock += 0.001;
+    device.write_outputs(outputs);
+    device.read_inputs(inputs);
+  }
+  const size_t allocations = count->allocations();
+  count.reset();
+  EXPECT_EQ(allocations, 0u);
 }
