@@ -1,5 +1,5 @@
 // The page in Debian's chromium, headless, driven by playwright-core (no browser download):
-//   node e2e/page_test.mjs LOGIN_URL SCREENSHOT_PNG
+//   node e2e/page_test.mjs LOGIN_URL SCREENSHOT_PNG [HOLD_S]
 // Run inside the slave's network namespace by tests/interop/test_web_page.py, which drives
 // the master (pysoem) meanwhile and reads the progress lines printed here ("STEP ...").
 // Steps: log in through the printed URL; see the default rack's RIMs and slots; see the
@@ -7,7 +7,8 @@
 // "unplug RIM 2" and see the LEDs, RIM state and exception tree follow; screenshot.
 import { chromium } from "playwright-core";
 
-const [loginUrl, screenshot] = process.argv.slice(2);
+const [loginUrl, screenshot, holdArg] = process.argv.slice(2);
+const holdSeconds = Number(holdArg ?? "0");  // stay open and streaming this long before the unplug
 if (!loginUrl || !screenshot) {
   console.error("usage: node e2e/page_test.mjs LOGIN_URL SCREENSHOT_PNG");
   process.exit(2);
@@ -64,6 +65,10 @@ try {
   step(`channel changed: ${[...seen].join(" -> ")}`);
   await page.locator("#v-0-2-in-0").click();  // plot it
   await page.waitForTimeout(1500);
+  if (holdSeconds > 0) {
+    step(`holding ${holdSeconds} s`);
+    await page.waitForTimeout(holdSeconds * 1000);
+  }
 
   // Unplug RIM 2 with a click: the API's answer shows, the LEDs go off, the tree updates.
   await page.getByRole("button", { name: "unplug RIM 2" }).click();
