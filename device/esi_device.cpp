@@ -223,13 +223,18 @@ class Reader {
                                         mailbox.first_child().name() +
                                         "> is not supported (CoE only)");
     }
+    // FoE is announced in the SII (word 0x1C bit 3) as the ESI says; a device from its ESI
+    // serves CoE only, a FoE request gets the mailbox error "unsupported protocol".
+    d.foe = static_cast<bool>(mailbox.child("FoE"));
     if (auto eeprom = dev.child("Eeprom")) {
       if (auto cd = eeprom.child("ConfigData")) read_config_data(cd, d.config);
+      if (auto bs = eeprom.child("BootStrap")) read_bootstrap(bs, d.bootstrap);
     }
 
     if (out.has_coe) {
       if (auto dict = dev.child("Profile").child("Dictionary"))
         read_dictionary(dict, out.dictionary);
+      add_enum_objects(dev, out.dictionary);
     }
     for (auto p : dev.children("RxPdo")) d.rx_pdos.push_back(read_pdo(p, sm_nodes, d, out));
     for (auto p : dev.children("TxPdo")) d.tx_pdos.push_back(read_pdo(p, sm_nodes, d, out));
@@ -252,6 +257,22 @@ class Reader {
     if (dev.child("Slots")) read_slots(dev, out);
     if (out.has_coe) complete_dictionary(out, dev);
     return out;
+  }
+
+  // Eeprom/BootStrap (ETG.2000): SII words 0x14-0x17 as stored, 8 hex bytes: receive
+  // mailbox offset and size, send mailbox offset and size in BOOT (ETG.2010 Table 2).
+  void read_bootstrap(pugi::xml_node bs, esi::BootstrapMailbox& m) {
+    const std::string hex = bs.text().get();
+    if (hex.size() != 16) fail(bs, "<BootStrap> is not 8 hex bytes");
+    uint16_t w[4] = {};
+    for (size_t i = 0; i < 8; ++i) {
+      unsigned v = 0;
+      auto [p, ec] = std::from_chars(hex.data() + 2 * i, hex.data() + 2 * i + 2, v, 16);
+      if (ec != std::errc{} || p != hex.data() + 2 * i + 2)
+        fail(bs, "<BootStrap> is not hex bytes");
+      w[i / 2] = static_cast<uint16_t>(w[i / 2] | (v << (8 * (i % 2))));
+    }
+    m = {w[0], w[1], w[2], w[3]};
   }
 
   void read_config_data(pugi::xml_node cd, esi::EscConfigArea& c) {
@@ -321,13 +342,82 @@ class Reader {
     return std::nullopt;
   }
 
+  // The standard structure a RECORD object of the communication area has, as SDO Information
+  // gives its data type (ETG.1000.6 §5.6.7.4.5 complex data types 0x0020..0x002F): 0x1018
+  // IDENTITY, PDO mapping objects PDO_MAPPING, 0x1C32/0x1C33 SM_SYNCHRONISATION, ETG.5001
+  // 0xF000 MODULAR_DEVICE_PROFILE, command objects 0xF002 and 0xFBF0..0xFBFF COMMAND_PAR. An ESI
+  // names only the DataType; 0 = the generic RECORD (0x002A) when SDO Information asks.
+  static uint16_t standard_record_type(uint16_t index) {
+    namespace rt = coe::record_type;
+    if (index == 0x1018) return rt::kIdentity;
+    if ((index >= 0x1600 && index <= 0x17FF) || (index >= 0x1A00 && index <= 0x1BFF))
+      return rt::kPdoMapping;
+    if (index == 0x1C32 || index == 0x1C33) return rt::kSmSynchronisation;
+    if (index == 0xF000) return rt::kModularDeviceProfile;
+    if (index == 0xF002 || (index >= 0xFBF0 && index <= 0xFBFF)) return rt::kCommandPar;
+    return 0;
+  }
+
+  // "DT0800EN04" -> 0x0800 (ETG.2000 naming of enumeration DataTypes).
+  static std::optional<uint16_t> enum_index(std::string_view name) {
+    if (name.size() < 8 || name.substr(0, 2) != "DT" || name.substr(6, 2) != "EN")
+      return std::nullopt;
+    unsigned v = 0;
+    auto [p, ec] = std::from_chars(name.data() + 2, name.data() + 6, v, 16);
+    if (ec != std::errc{} || p != name.data() + 6 || !coe::is_enum_type(static_cast<uint16_t>(v)))
+      return std::nullopt;
+    return static_cast<uint16_t>(v);
+  }
+
+  // Every enumeration DataType DTnnnnENxx of the file (device and module dictionaries) becomes
+  // the enum type nnnn and its object (ETG.1000.6 §5.6.7.4.4, structure ENUM 0x0028):
+  // subindex 0 the number of values, subindex k the value as 32-bit integer followed by its
+  // text, as OCTET_STRING named by the text.
+  void add_enum_objects(pugi::xml_node any, coe::ObjectDictionary& od) const {
+    std::set<uint16_t> done;
+    for (const auto& x : any.root().select_nodes("//DataType[EnumInfo]")) {
+      const auto n = x.node();
+      const std::string name = n.child("Name").text().get();
+      const auto index = enum_index(name);
+      if (!index || !done.insert(*index).second || od.find(*index)) continue;
+      coe::EnumType t;
+      t.index = *index;
+      t.name = name;
+      t.bit_size = static_cast<uint16_t>(child_number(n, "BitSize"));
+      coe::Object o(*index, coe::ObjectCode::Record, name, coe::record_type::kEnum);
+      size_t count = 0;
+      for (auto e : n.children("EnumInfo")) (void)e, ++count;
+      if (count > 0xFE) fail(n, "more than 254 EnumInfo values");
+      o.add(coe::make_entry(0, "Number of entries", coe::DataType::Unsigned8, 8, coe::access::kRo,
+                            {static_cast<uint8_t>(count)}));
+      uint8_t sub = 1;
+      for (auto e : n.children("EnumInfo")) {
+        const auto value = child_number(e, "Enum");
+        const std::string text = e.child("Text").text().get();
+        t.values.push_back({value, text});
+        std::vector<uint8_t> bytes;
+        for (int k = 0; k < 4; ++k) bytes.push_back(static_cast<uint8_t>(value >> (8 * k)));
+        bytes.insert(bytes.end(), text.begin(), text.end());
+        const auto bits = static_cast<uint16_t>(bytes.size() * 8);
+        o.add(coe::make_entry(sub++, text, coe::DataType::OctetString, bits, coe::access::kRo,
+                              std::move(bytes)));
+      }
+      o.finalize();
+      od.add_enum(std::move(t));
+      od.add(std::move(o));
+    }
+  }
+
   TypeInfo resolve_type(pugi::xml_node at, std::string_view name) const {
     if (auto b = basic_type(name)) return *b;
     if (auto it = types_.find(std::string(name)); it != types_.end()) {
       auto n = it->second;
-      // An enumeration is carried as the unsigned type of its size (names are not served).
       if (n.child("EnumInfo")) {
         const auto bits = static_cast<uint16_t>(child_number(n, "BitSize"));
+        // An enumeration named DTnnnnENxx is the enum data type object nnnn (0x0800..0x0FFF,
+        // ETG.1000.6 §5.6.7.4.4; see add_enum_objects); any other is carried as the unsigned
+        // type of its size (its value names are not served).
+        if (auto index = enum_index(name)) return TypeInfo{*index, bits, {}};
         uint16_t t = bits <= 8 ? 0x0005 : bits <= 16 ? 0x0006 : 0x0007;
         return TypeInfo{t, bits, {}};
       }
@@ -375,6 +465,36 @@ class Reader {
     return bits;
   }
 
+  // Info/MinData, MaxData (ETG.2000 ObjectInfoType, little-endian like DefaultData): the range
+  // a write is checked against and SDO Information reports; signed types sign-extended.
+  void read_limits(pugi::xml_node info, coe::Entry& e) const {
+    if (!info) return;
+    auto limit = [&](const char* name) -> std::optional<int64_t> {
+      auto n = info.child(name);
+      if (!n) return std::nullopt;
+      const std::string hex = n.text().get();
+      if (hex.size() % 2 != 0 || hex.size() > 16 || hex.size() / 2 > e.byte_length())
+        fail(n, std::string("<") + name + "> is not at most " + std::to_string(e.byte_length()) +
+                    " hex bytes");
+      uint64_t v = 0;
+      for (size_t i = 0; i < hex.size(); i += 2) {
+        unsigned b = 0;
+        auto [p, ec] = std::from_chars(hex.data() + i, hex.data() + i + 2, b, 16);
+        if (ec != std::errc{} || p != hex.data() + i + 2)
+          fail(n, std::string("<") + name + "> is not hex bytes");
+        v |= static_cast<uint64_t>(b) << (4 * i);
+      }
+      const size_t bits = hex.size() * 4;
+      const bool is_signed =
+          e.type() == coe::DataType::Integer8 || e.type() == coe::DataType::Integer16 ||
+          e.type() == coe::DataType::Integer32 || e.type() == coe::DataType::Integer64;
+      if (is_signed && bits > 0 && bits < 64 && (v >> (bits - 1)) & 1) v |= ~uint64_t{0} << bits;
+      return static_cast<int64_t>(v);
+    };
+    if (auto v = limit("MinData")) e.min = v;
+    if (auto v = limit("MaxData")) e.max = v;
+  }
+
   std::vector<uint8_t> read_default(pugi::xml_node info, const coe::Entry& e) const {
     if (!info) return {};
     if (auto dd = info.child("DefaultData")) {
@@ -393,6 +513,14 @@ class Reader {
                      std::to_string(e.byte_length()));
       if (!coe::is_string(e.type())) b.resize(e.byte_length(), 0);
       return b;
+    }
+    // ETG.2000 Info/DefaultString: a string's default as text.
+    if (auto ds = info.child("DefaultString"); ds && coe::is_string(e.type())) {
+      const std::string text = ds.text().get();
+      if (text.size() > e.byte_length())
+        fail(ds, "<DefaultString> is longer than the entry's " + std::to_string(e.byte_length()) +
+                     " bytes");
+      return {text.begin(), text.end()};
     }
     if (auto dv = info.child("DefaultValue")) {
       std::string text = dv.text().get();
@@ -465,6 +593,36 @@ class Reader {
     (void)at;
   }
 
+  // A record DataType may leave a gap between two SubItems (BitOffs jumps) or after the last
+  // (BitSize, and SubIndex 0 counting one more): where exactly one subindex is missing, it is
+  // that gap, kept as a padding entry (counted in the layout, never addressed by SDO; SDO
+  // Information describes it with its bit length, as for the native rack's pad entries).
+  static void fill_record_gaps(std::vector<coe::Entry>& entries, uint16_t bits) {
+    auto pad = [](size_t sub, size_t offset, size_t length) {
+      coe::Entry e = coe::make_entry(static_cast<uint8_t>(sub), "Padding", coe::DataType{},
+                                     static_cast<uint16_t>(length), 0);
+      e.padding = true;
+      e.bit_offset = static_cast<uint16_t>(offset);
+      return e;
+    };
+    std::vector<coe::Entry> out;
+    for (size_t i = 0; i < entries.size(); ++i) {
+      if (i > 0) {
+        const auto& prev = out.back();
+        const size_t end = prev.bit_offset + prev.bit_length;
+        if (entries[i].subindex == prev.subindex + 2 && entries[i].bit_offset > end && i > 1)
+          out.push_back(pad(prev.subindex + 1u, end, entries[i].bit_offset - end));
+      }
+      out.push_back(std::move(entries[i]));
+    }
+    const size_t count = out.front().default_value.empty() ? 0 : out.front().default_value[0];
+    const auto& last = out.back();
+    const size_t end = last.bit_offset + last.bit_length;
+    if (out.size() > 1 && count == last.subindex + 1u && bits > end)
+      out.push_back(pad(count, end, bits - end));
+    entries = std::move(out);
+  }
+
   coe::Object read_object(pugi::xml_node o) {
     const auto index = child_number(o, "Index");
     if (index <= 0 || index > 0xFFFF) fail(o, "object index out of range");
@@ -483,6 +641,7 @@ class Reader {
       coe::Entry e = coe::make_entry(0, name, static_cast<coe::DataType>(ti.coe_type), bits,
                                      read_access(o.child("Flags"), coe::access::kRo));
       e.default_value = read_default(info, e);
+      read_limits(info, e);
       obj.add(std::move(e));
       obj.finalize();
       return obj;
@@ -502,15 +661,18 @@ class Reader {
       if (i < sub_infos.size()) {
         auto sinfo = sub_infos[i].child("Info");
         entries[i].default_value = read_default(sinfo, entries[i]);
+        read_limits(sinfo, entries[i]);
         if (auto f = sub_infos[i].child("Flags"))
           entries[i].access = read_access(f, entries[i].access);
       }
       if (i == 0 && entries[0].default_value.empty())
         entries[0].default_value = {static_cast<uint8_t>(entries.back().subindex)};
     }
-    coe::Object obj(static_cast<uint16_t>(index),
-                    is_array ? coe::ObjectCode::Array : coe::ObjectCode::Record, name,
-                    is_array ? entries.back().data_type : 0);
+    if (!is_array) fill_record_gaps(entries, bits);
+    coe::Object obj(
+        static_cast<uint16_t>(index), is_array ? coe::ObjectCode::Array : coe::ObjectCode::Record,
+        name,
+        is_array ? entries.back().data_type : standard_record_type(static_cast<uint16_t>(index)));
     try {
       for (auto& e : entries) obj.add(std::move(e));
     } catch (const std::logic_error& err) {
@@ -666,11 +828,11 @@ class Reader {
     (void)dev;
   }
 
-  // ETG.5001 modular device: the <Slots> element with a module list is not built from the ESI
-  // yet; refuse it precisely rather than build a device without its modules.
-  void read_slots(pugi::xml_node dev, EsiDevice&) {
-    fail(dev.child("Slots"), "<Slots> (ETG.5001 modular device) is not supported yet");
-  }
+  // ETG.5001 modular device: served as its device-level content describes it (Dictionary,
+  // PDOs and SMs of its default module configuration, as `rackcat esi` writes a rack); the
+  // <Slots>/<Modules> catalogue is not applied, so choosing another module list is not
+  // supported (docs/LINE.md).
+  void read_slots(pugi::xml_node dev, EsiDevice&) { (void)dev; }
 
   // Adds what a CoE master reads that the Dictionary may leave out: 0x1000, 0x1008, 0x1018,
   // 0x1C00, mapping objects, 0x1C12/0x1C13, and the mapped application objects.
@@ -709,7 +871,7 @@ class Reader {
           static_cast<uint16_t>(8 * std::max<size_t>(1, d.device_name.size())), acc::kRo,
           {d.device_name.begin(), d.device_name.end()});
     if (!od.find(0x1018)) {
-      coe::Object o(0x1018, coe::ObjectCode::Record, "Identity", 0);
+      coe::Object o(0x1018, coe::ObjectCode::Record, "Identity", coe::record_type::kIdentity);
       o.add(coe::make_entry(0, "Number of entries", DataType::Unsigned8, 8, acc::kRo, {4}));
       const char* names[] = {"Vendor ID", "Product code", "Revision", "Serial number"};
       const uint32_t vals[] = {d.vendor_id, d.product_code, d.revision, d.serial};
@@ -747,7 +909,8 @@ class Reader {
             if (e.subindex == 0) {
               var(e.index, e.name, static_cast<DataType>(e.data_type), e.bit_length, a, {});
             } else {
-              coe::Object o(e.index, coe::ObjectCode::Record, e.name, 0);
+              coe::Object o(e.index, coe::ObjectCode::Record, e.name,
+                            standard_record_type(e.index));
               o.add(coe::make_entry(0, "Number of entries", DataType::Unsigned8, 8, acc::kRo,
                                     {e.subindex}));
               od.add(std::move(o));

@@ -161,6 +161,17 @@ class DictionaryWriter {
     if (e.type() == coe::DataType::VisibleString) {
       text_child(info, "DefaultString", visible_string(value));
     } else {
+      // A range narrower than the type's (ETG.2000 ObjectInfoType MinData/MaxData, before
+      // DefaultData): the limits SDO Information reports and a write is checked against.
+      auto limit = [&](const char* name, std::optional<int64_t> v) {
+        if (!v) return;
+        std::vector<uint8_t> b(e.byte_length());
+        for (size_t i = 0; i < b.size() && i < 8; ++i)
+          b[i] = static_cast<uint8_t>(static_cast<uint64_t>(*v) >> (8 * i));
+        text_child(info, name, hex_bytes(b));
+      };
+      limit("MinData", e.min);
+      limit("MaxData", e.max);
       text_child(info, "DefaultData", hex_bytes(value));
     }
   }

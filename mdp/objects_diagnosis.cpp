@@ -13,7 +13,7 @@ using namespace detail;
 void add_diagnosis_objects(const RackConfig&, coe::ObjectDictionary& od) {
   od.add(coe::diag::History(kDiagnosisMessages).make_object());
 
-  Object pdo(kDiagnosisTxPdo, ObjectCode::Record, "TxPDO Diagnosis", 0);
+  Object pdo(kDiagnosisTxPdo, ObjectCode::Record, "TxPDO Diagnosis", coe::record_type::kPdoMapping);
   pdo.add(sub0(2));
   // ETG.1000.6 §5.6.7.4.8 mapping entries: index << 16 | subindex << 8 | bit length; the
   // 7-bit gap to the byte boundary is padding (index 0, subindex 0).
