@@ -395,9 +395,9 @@ class Reader {
         const auto value = child_number(e, "Enum");
         const std::string text = e.child("Text").text().get();
         t.values.push_back({value, text});
-        std::vector<uint8_t> bytes;
-        for (int k = 0; k < 4; ++k) bytes.push_back(static_cast<uint8_t>(value >> (8 * k)));
-        bytes.insert(bytes.end(), text.begin(), text.end());
+        std::vector<uint8_t> bytes(4 + text.size());
+        for (size_t k = 0; k < 4; ++k) bytes[k] = static_cast<uint8_t>(value >> (8 * k));
+        std::copy(text.begin(), text.end(), bytes.begin() + 4);
         const auto bits = static_cast<uint16_t>(bytes.size() * 8);
         o.add(coe::make_entry(sub++, text, coe::DataType::OctetString, bits, coe::access::kRo,
                               std::move(bytes)));
