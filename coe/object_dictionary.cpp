@@ -90,6 +90,16 @@ void Object::load_defaults() {
   }
 }
 
+bool Object::set_default(uint8_t subindex, std::span<const uint8_t> value) {
+  auto it = std::find_if(entries_.begin(), entries_.end(),
+                         [subindex](const Entry& e) { return e.subindex == subindex; });
+  if (it == entries_.end()) return false;
+  it->default_value.assign(it->byte_length(), 0);
+  std::copy_n(value.begin(), std::min(value.size(), it->default_value.size()),
+              it->default_value.begin());
+  return true;
+}
+
 const Entry* Object::entry(uint8_t subindex) const {
   if (subindex < entries_->size() && (*entries_)[subindex].subindex == subindex) {
     return &(*entries_)[subindex];

@@ -158,6 +158,10 @@ class Object {
   std::string get_string(uint8_t subindex) const;
   // Reset every entry to its default.
   void load_defaults();
+  // Replaces the default of `subindex` (byte_length() bytes LE, shorter zero-filled, longer cut);
+  // the image changes at the next load_defaults(). False for an unknown subindex. For power-on
+  // values a device reset may change (a new firmware's version, the enumerated modules).
+  bool set_default(uint8_t subindex, std::span<const uint8_t> value);
 
   ObjectHooks hooks;
 

@@ -21,6 +21,8 @@
 #include "mdp/file_access.hpp"
 #include "mdp/firmware_image.hpp"
 #include "mdp/firmware_store.hpp"
+#include "mdp/firmware_version.hpp"
+#include "mdp/module_enumeration.hpp"
 #include "mdp/object_dictionary_builder.hpp"
 #include "mdp/parameter_set.hpp"
 #include "mdp/parameter_store.hpp"
@@ -78,6 +80,7 @@ struct Device::Impl {
   std::unique_ptr<FileAccess> files;
   std::unique_ptr<foe::FoeServer> foe;    // after `files` and `firmware`: destroyed first
   std::vector<uint8_t> running_firmware;  // the container the device "runs" since power-on
+  FirmwareInfo built_in_firmware;         // the rack file's versions: what runs without a container
   std::string firmware_report;
   std::vector<uint8_t> last_foe_request;  // double-write detection of FoE requests
   std::vector<uint8_t> default_payload;   // the parameter set as shipped (factory defaults)
@@ -96,6 +99,7 @@ struct Device::Impl {
   Object* input_latch_esc = nullptr;
   std::chrono::steady_clock::time_point last_sync_at{};
   coe::diag::History history{kDiagnosisMessages};
+  std::vector<uint8_t> enumerated;  // per module: enumerated now (module_enumeration.hpp)
   // A command executed in validate_write, applied to its object in after_write.
   struct PendingCommand {
     uint8_t status = 0;
@@ -193,6 +197,9 @@ struct Device::Impl {
         load_report = r->report;
         complete(0xFBF0, cmd::kStatusError);
       } else {
+        // The reset restarts the firmware: a container installed since power-on runs now.
+        select_firmware();
+        apply_firmware_version(od, config.control);
         power_on_reset(*r);  // every object, 0xFBF0 included, back to power-on values
         notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
         notify([&](CycleListener& l) { l.on_device_reset(*self, reset_factory); });
@@ -294,25 +301,35 @@ struct Device::Impl {
   // SII revision; else the built-in version runs (as a container with an empty payload).
   void load_firmware() {
     firmware = std::make_unique<FirmwareStore>(dir);
+    const auto& cm = config.control;
+    built_in_firmware = {cm.vendor_id, cm.product_code, cm.revision, cm.software_version,
+                         cm.firmware_version.substr(0, kFirmwareShortVersionMax)};
+    select_firmware();
+  }
+  // Power-on and device reset (0xFBF0): the versions of the container that runs from now on.
+  void select_firmware() {
     std::string detail;
     auto& cm = config.control;
+    firmware_report.clear();
     if (auto bytes = firmware->read_installed(kMaxFirmwareFile, detail)) {
       FirmwareInfo info;
       if (verify_firmware(*bytes, cm.vendor_id, cm.product_code, info, detail) ==
           foe::FoeError::None) {
         cm.revision = info.revision;
         cm.software_version = info.software_version;
-        if (!info.short_version.empty()) cm.firmware_version = info.short_version;
+        cm.firmware_version =
+            info.short_version.empty() ? built_in_firmware.short_version : info.short_version;
         running_firmware = std::move(*bytes);
         firmware_report = "firmware " + cm.software_version + " from " + firmware->path();
         return;
       }
       firmware_report = "ignored firmware " + firmware->path() + ": " + detail + "; ";
     }
-    FirmwareInfo built_in{cm.vendor_id, cm.product_code, cm.revision, cm.software_version,
-                          cm.firmware_version.substr(0, kFirmwareShortVersionMax)};
+    cm.revision = built_in_firmware.revision;
+    cm.software_version = built_in_firmware.software_version;
+    cm.firmware_version = built_in_firmware.short_version;
     std::string error;
-    running_firmware = pack_firmware(built_in, {}, error).value_or(std::vector<uint8_t>{});
+    running_firmware = pack_firmware(built_in_firmware, {}, error).value_or(std::vector<uint8_t>{});
     firmware_report += "firmware " + cm.software_version + " (built in)";
   }
 
@@ -461,12 +478,8 @@ void Device::Impl::install_hooks() {
   od.find(0xF002)->hooks.after_write = [this](Object& obj, int) {
     const auto c = obj.bytes(1);
     if (!std::equal(c.begin(), c.end(), cmd::kScan.begin(), cmd::kScan.end())) return;
-    if (Object* detected = od.find(0xF050)) {
-      detected->image()[0] = static_cast<uint8_t>(config.modules.size());
-      for (const auto& m : config.modules) {
-        detected->set_u(static_cast<uint8_t>(m.number), m.card->module_ident);
-      }
-    }
+    // Every configured module; the rack then narrows it to what it detects (guide Table 23).
+    self->enumerate_modules(std::vector<uint8_t>(config.modules.size(), 1));
     notify([&](CycleListener& l) { l.on_detect_modules(*self); });
     obj.set_u(2, cmd::kStatusScanComplete);
     restore_command(obj);
@@ -554,6 +567,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
     d.load_report = "stored parameters not loaded";
   }
   d.image->compile();
+  d.enumerated.assign(d.config.modules.size(), 1);
   d.sdo = std::make_unique<coe::SdoServer>(d.od);
   d.start_foe(d.config.control.foe_password);
 }
@@ -637,10 +651,24 @@ uint64_t Device::diagnosis_time(bool& local) const {
       std::chrono::duration_cast<std::chrono::nanoseconds>(now - d.power_on).count());
 }
 
+void Device::enumerate_modules(std::span<const uint8_t> present) {
+  Impl& d = *impl_;
+  std::vector<uint8_t> now(d.config.modules.size(), 1);
+  for (size_t i = 0; i < now.size() && i < present.size(); ++i) now[i] = present[i] != 0;
+  mdp::enumerate_modules(d.od, d.config, d.enumerated, now);
+  d.enumerated = std::move(now);
+  d.image->compile();
+}
+
 uint16_t Device::request_state(EsmState from, EsmState to) {
   const bool entering_safeop = to == EsmState::SafeOp || to == EsmState::Op;
   if (entering_safeop && (from == EsmState::PreOp || from == EsmState::Init)) {
-    if (module_lists_mismatch(impl_->od)) return kAlModuleIdentMismatch;
+    if (module_lists_mismatch(impl_->od)) {
+      // ETG.5001.1: the configured list must equal the detected one; the log says where not.
+      std::fprintf(stderr, "rackcat: PREOP->SAFEOP refused (AL 0x%04X): %s\n",
+                   kAlModuleIdentMismatch, module_list_difference(impl_->od).c_str());
+      return kAlModuleIdentMismatch;
+    }
     // The PDO configuration the master left in PREOP must compile (ETG.1000.6 Table 11:
     // 0x001D invalid output configuration, 0x001E invalid input configuration).
     coe::PdoDirection failed = coe::PdoDirection::Rx;

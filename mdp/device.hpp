@@ -126,6 +126,12 @@ class Device {
   // (an event within the last second); otherwise ns since power-on and `local` = true.
   uint64_t diagnosis_time(bool& local) const;
 
+  // --- Module enumeration (mdp/module_enumeration.hpp): `present[i]` != 0 enumerates module
+  // i + 1. 0xF050, 0x3000, the default 0xF030 and the default 0x1C12/0x1C13 follow; the process
+  // image is recompiled. The rack calls it at start, on 0xF002 and on 0xFBF0 (Detect Modules
+  // Override 0: the modules of the online RIMs; 1: all). Mailbox path, not cyclic.
+  void enumerate_modules(std::span<const uint8_t> present);
+
   // --- ESM (ETG.1000.6 §5.3). request_state returns 0 to accept or an AL status code:
   // 0x0070 when PREOP->SAFEOP finds the configured module list 0xF030 different from the
   // detected list 0xF050 (ETG.5001.1). SM size checks (0x001D/0x001E) are the ESC's.

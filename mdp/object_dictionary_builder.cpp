@@ -6,6 +6,7 @@ void build_object_dictionary(const RackConfig& config, coe::ObjectDictionary& od
   add_communication_objects(config, od);
   add_device_info_objects(config, od);
   add_safe_state_objects(config, od);
+  add_substitute_objects(config, od);
   add_tc_uart_objects(config, od);
   add_process_data_objects(config, od);
   add_mdp_objects(config, od);

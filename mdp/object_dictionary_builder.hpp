@@ -9,6 +9,8 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
+#include <vector>
 
 #include "coe/object_dictionary.hpp"
 #include "mdp/rack_config.hpp"
@@ -22,6 +24,7 @@ void add_communication_objects(const RackConfig& config,
                                coe::ObjectDictionary& od);                          // 0x1000-0x1C33
 void add_device_info_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0x2000-0x3nn1
 void add_safe_state_objects(const RackConfig& config, coe::ObjectDictionary& od);   // 0x4nnX
+void add_substitute_objects(const RackConfig& config, coe::ObjectDictionary& od);   // 0x4nn8..C
 void add_tc_uart_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0x5nnX, 0x0800+
 void add_process_data_objects(const RackConfig& config,
                               coe::ObjectDictionary& od);                         // 0x6nnX/0x7nnX
@@ -52,5 +55,11 @@ inline constexpr uint16_t kSyncTypesSupported =
 // The module ident lists: 0xF050 (detected) and 0xF030 (configured) as they stand; true when
 // 0xF030 is in use (subindex 0 != 0) and differs from 0xF050 (ETG.5001.1: AL status 0x0070).
 bool module_lists_mismatch(const coe::ObjectDictionary& od);
+
+// The default 0x1C12 (rx) / 0x1C13 assignment: the PDO of each enumerated module
+// (`enumerated[i]` != 0 for module i + 1; an empty span enumerates every module) that has one,
+// in module order, cut where the SM maximum would be exceeded.
+std::vector<uint16_t> default_assignment(const RackConfig& config, bool rx,
+                                         std::span<const uint8_t> enumerated);
 
 }  // namespace rackcat::mdp

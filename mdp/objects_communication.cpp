@@ -135,19 +135,7 @@ Assignment candidate(const Object& obj, int subindex, std::span<const uint8_t> d
 Object assignment_object(const RackConfig& cfg, coe::ObjectDictionary& od, bool rx) {
   Object o(rx ? 0x1C12 : 0x1C13, ObjectCode::Array, rx ? "RxPDO assign" : "TxPDO assign",
            static_cast<uint16_t>(DataType::Unsigned16));
-  // Default: every module's PDO of this direction in module order, as long as the total fits
-  // the SM maximum (a rack of 120 oversampled analog cards has more than 16 KiB of inputs; the
-  // master then assigns the subset it wants).
-  std::vector<uint16_t> defaults;
-  uint32_t bits = 0;
-  for (const auto& m : cfg.modules) {
-    const auto kind = rx ? m.card->output : m.card->input;
-    if (!kind) continue;
-    const uint32_t pdo_bits = io_layout(*kind, rx)->object_bits();
-    if ((bits + pdo_bits + 7) / 8 > sm::kMaxProcessDataBytes) break;
-    bits += pdo_bits;
-    defaults.push_back(rx ? sm::rx_pdo_index(m.number) : sm::tx_pdo_index(m.number));
-  }
+  const std::vector<uint16_t> defaults = default_assignment(cfg, rx, {});
   o.add(sub0(static_cast<uint8_t>(defaults.size()), acc("ro,wr_preop")));
   for (uint16_t s = 1; s <= kMaxAssignEntries; ++s) {
     const uint16_t def = s <= defaults.size() ? defaults[s - 1] : 0;
@@ -207,6 +195,26 @@ Object sync_parameter_object(bool outputs) {
 }
 
 }  // namespace
+
+std::vector<uint16_t> default_assignment(const RackConfig& cfg, bool rx,
+                                         std::span<const uint8_t> enumerated) {
+  // Every enumerated module's PDO of this direction in module order, as long as the total fits
+  // the SM maximum (a rack of 120 oversampled analog cards has more than 16 KiB of inputs; the
+  // master then assigns the subset it wants).
+  std::vector<uint16_t> defaults;
+  uint32_t bits = 0;
+  for (size_t i = 0; i < cfg.modules.size(); ++i) {
+    const Module& m = cfg.modules[i];
+    if (i < enumerated.size() && enumerated[i] == 0) continue;
+    const auto kind = rx ? m.card->output : m.card->input;
+    if (!kind) continue;
+    const uint32_t pdo_bits = io_layout(*kind, rx)->object_bits();
+    if ((bits + pdo_bits + 7) / 8 > sm::kMaxProcessDataBytes) break;
+    bits += pdo_bits;
+    defaults.push_back(rx ? sm::rx_pdo_index(m.number) : sm::tx_pdo_index(m.number));
+  }
+  return defaults;
+}
 
 void add_communication_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
   const ControlModule& cm = cfg.control;

@@ -8,6 +8,7 @@
 
 #include "coe/bits.hpp"
 #include "coe/entry_check.hpp"
+#include "mdp/substitute_values.hpp"
 
 namespace rackcat::mdp {
 
@@ -35,6 +36,11 @@ ParameterSet::ParameterSet(coe::ObjectDictionary& od, const RackConfig& config) 
       add_all(m.index(0x4000, static_cast<uint8_t>(*m.card->safe_state)), 1);
     }
     if (m.card->uart) add_all(m.index(0x5000, 5), 1);
+    // Substitute values (mdp/substitute_values.hpp); the status 0x4nnC is live, not stored.
+    for (uint8_t nibble :
+         {substitute::kOutputReaction, substitute::kInputReaction, substitute::kInputValue}) {
+      add_all(m.index(0x4000, nibble), 1);
+    }
   }
   for (uint16_t index : {0xF3A1, 0xF3A2, 0xF3A3, 0xF3A4, 0xF3A6, 0xF3A8}) add_all(index, 1);
   add_all(0xF030, 0);

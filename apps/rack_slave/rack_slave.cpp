@@ -1,5 +1,6 @@
 #include "apps/rack_slave/rack_slave.hpp"
 
+#include <algorithm>
 #include <utility>
 
 #include "apps/rack_slave/mailbox_events.hpp"
@@ -34,6 +35,17 @@ RackSlave::RackSlave(mdp::RackConfig config, const std::shared_ptr<mdp::StateDir
 RackSlave::~RackSlave() {
   device_->remove_listener(&reset_listener_);
   rack_.reset();  // detaches from the device before the device goes
+}
+
+void RackSlave::device_reset() {
+  // Rebuilt in place when the size is unchanged, so a view of the image stays valid.
+  std::vector<uint8_t> image = esi::build_sii(*device_).bytes;
+  if (image.size() == sii_.size()) {
+    std::copy(image.begin(), image.end(), sii_.begin());
+  } else {
+    sii_ = std::move(image);
+  }
+  restart_pending_ = true;
 }
 
 uint16_t RackSlave::on_state_request(ecat::AlState from, ecat::AlState to) {

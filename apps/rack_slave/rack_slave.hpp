@@ -58,10 +58,13 @@ class RackSlave final : public ecat::Application {
   // Hears the device reset command (0xFBF0) among the device's listeners.
   struct ResetListener final : mdp::CycleListener {
     explicit ResetListener(RackSlave& s) : slave(s) {}
-    void on_device_reset(mdp::Device&, bool /*factory*/) override { slave.restart_pending_ = true; }
+    void on_device_reset(mdp::Device&, bool /*factory*/) override { slave.device_reset(); }
     RackSlave& slave;
   };
   ResetListener reset_listener_{*this};
+  // 0xFBF0 ran: the SII image follows the firmware that runs now (its revision, SII word 0x0C),
+  // and the ESC side restarts once the answer is read.
+  void device_reset();
 };
 
 }  // namespace rackcat::apps

@@ -10,6 +10,7 @@
 #include "modules/cards/drivers.hpp"
 #include "modules/cards/entry_slot.hpp"
 #include "modules/cards/safe_state.hpp"
+#include "modules/cards/substitute.hpp"
 
 namespace rackcat::modules {
 namespace {
@@ -84,6 +85,18 @@ class AnalogInputDriver final : public CardDriver {
   }
   const char* input_unit() const override { return "V"; }
 
+ protected:
+  void put_input_code(size_t i, uint32_t code) override {
+    if (samples_ == 1) {
+      slots_[i].set(code);
+      return;
+    }
+    for (unsigned k = 0; k < samples_; ++k) {
+      raw_[i][2 * k] = static_cast<uint8_t>(code);
+      raw_[i][2 * k + 1] = static_cast<uint8_t>(code >> 8);
+    }
+  }
+
  private:
   coe::Object& obj_;
   AnalogScale scale_;
@@ -111,14 +124,20 @@ class AnalogOutputDriver final : public CardDriver {
     }
   }
 
+  // Leaving OP: per channel the 0x4nn8 reaction (substitute.hpp); 0x8000 is the guide's rule.
+  // Extremes: all 16 bits set, and the codes of the card's voltage range (0x3nn1:08/09).
   void apply_safe_state() override {
     const uint32_t enable = safe_ ? static_cast<uint32_t>(safe_->get_u(1)) : 0;
     const uint32_t action = safe_ ? static_cast<uint32_t>(safe_->get_u(2)) : 0;
+    const ChannelCodes extremes{0xFFFF, scale_.to_code(scale_.min_v), scale_.to_code(scale_.max_v)};
     for (size_t i = 0; i < outputs_.size(); ++i) {
       const auto value =
           safe_ ? static_cast<uint16_t>(safe_->get_u(static_cast<uint8_t>(3 + i))) : uint16_t{0};
-      const uint16_t code = analog_safe_state(static_cast<uint16_t>(outputs_[i].code), enable,
-                                              action, value, static_cast<unsigned>(i));
+      const auto current = static_cast<uint16_t>(outputs_[i].code);
+      const uint16_t guide =
+          analog_safe_state(current, enable, action, value, static_cast<unsigned>(i));
+      const auto code = static_cast<uint16_t>(
+          output_substitute(output_reaction(i), guide, current, value, extremes));
       drive(i, scale_.to_volts(code), code);
     }
   }

@@ -1,6 +1,7 @@
 #include "modules/cards/card_driver.hpp"
 
 #include "modules/cards/drivers.hpp"
+#include "modules/cards/substitute.hpp"
 
 namespace rackcat::modules {
 
@@ -8,6 +9,38 @@ CardDriver::CardDriver(const mdp::Module& module, coe::ObjectDictionary& od, siz
                        size_t outputs)
     : module_(module), od_(od), inputs_(inputs), outputs_(outputs) {
   for (auto& in : inputs_) in.source = std::make_unique<ConstantSource>(0.0);
+  namespace sv = mdp::substitute;
+  output_reaction_ = object(0x4000, sv::kOutputReaction);
+  input_reaction_ = object(0x4000, sv::kInputReaction);
+  input_value_ = object(0x4000, sv::kInputValue);
+  input_status_ = object(0x4000, sv::kInputStatus);
+}
+
+uint16_t CardDriver::output_reaction(size_t i) const {
+  if (output_reaction_ == nullptr || i >= output_reaction_->max_subindex()) {
+    return mdp::substitute::kGuide;
+  }
+  return static_cast<uint16_t>(output_reaction_->get_u(static_cast<uint8_t>(i + 1)));
+}
+
+void CardDriver::substitute_inputs(bool rim_offline) {
+  if (input_reaction_ == nullptr) return;
+  uint32_t status = 0;
+  for (size_t i = 0; i < inputs_.size() && i < input_reaction_->max_subindex(); ++i) {
+    InputChannel& in = inputs_[i];
+    if (!rim_offline && !in.open) {
+      in.last_valid = in.code;
+      continue;
+    }
+    status |= 1u << i;
+    const auto sub = static_cast<uint8_t>(i + 1);
+    const auto reaction = static_cast<uint16_t>(input_reaction_->get_u(sub));
+    if (reaction == mdp::substitute::kGuide) continue;  // the card's own code stays
+    const uint32_t value = input_value_ ? static_cast<uint32_t>(input_value_->get_u(sub)) : 0;
+    in.code = input_substitute(reaction, in.code, in.last_valid, value);
+    put_input_code(i, in.code);
+  }
+  if (input_status_ != nullptr) input_status_->set_u(0, status);
 }
 
 coe::Object* CardDriver::object(uint16_t area_base, uint8_t nibble) {

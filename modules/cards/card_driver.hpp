@@ -35,6 +35,7 @@ struct InputChannel {
   uint32_t code = 0;               // last code written to the process data
   bool open = false;               // thermocouple / RTD sensor break (fault injection)
   double loop_ohms = 10.0;         // thermocouple loop resistance reported in 0x5nn4
+  uint32_t last_valid = 0;         // last code from a present source (substitute "hold last")
 };
 
 struct OutputChannel {
@@ -73,6 +74,13 @@ class CardDriver {
   void de_energise();
   // The RIM is offline: its input process data reads 0.
   virtual void clear_inputs() = 0;
+  // Substitute values of the inputs (mdp/substitute_values.hpp), after write_inputs() or
+  // clear_inputs(): a channel whose source is missing (`rim_offline`, or its sensor open)
+  // reports what 0x4nnA/0x4nnB say and sets its bit in 0x4nnC; a present one remembers its
+  // code as the last valid one. Cyclic path: no allocation.
+  void substitute_inputs(bool rim_offline);
+  // The substitute reaction of output i (0x4nn8:i+1; the guide's rule without the object).
+  uint16_t output_reaction(size_t i) const;
 
   // Physical units for `rackcat ctl list`.
   virtual const char* input_unit() const { return ""; }
@@ -95,11 +103,17 @@ class CardDriver {
   coe::Object* object(uint16_t area_base, uint8_t nibble);
   // Update driven value, wire level and code of output i.
   void drive(size_t i, double value, uint32_t code);
+  // Puts `code` as input i's process-data value (every sample of an oversampled card).
+  virtual void put_input_code(size_t /*i*/, uint32_t /*code*/) {}
 
   const mdp::Module& module_;
   coe::ObjectDictionary& od_;
   std::vector<InputChannel> inputs_;
   std::vector<OutputChannel> outputs_;
+  coe::Object* output_reaction_ = nullptr;  // 0x4nn8
+  coe::Object* input_reaction_ = nullptr;   // 0x4nnA
+  coe::Object* input_value_ = nullptr;      // 0x4nnB
+  coe::Object* input_status_ = nullptr;     // 0x4nnC
 };
 
 // The driver for a module's card (by the catalogue's Signal); every input starts with a

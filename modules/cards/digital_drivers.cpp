@@ -10,6 +10,7 @@
 #include "modules/cards/drivers.hpp"
 #include "modules/cards/entry_slot.hpp"
 #include "modules/cards/safe_state.hpp"
+#include "modules/cards/substitute.hpp"
 
 namespace rackcat::modules {
 
@@ -82,6 +83,21 @@ class DigitalInputDriver final : public CardDriver {
 
   const char* input_unit() const override { return "bit"; }
 
+ protected:
+  void put_input_code(size_t i, uint32_t code) override {
+    const uint32_t bit = 1u << i;
+    if (samples_ == 1) {
+      const auto word = static_cast<uint32_t>(obj_.get_u(1));
+      word_.set((code & 1u) ? word | bit : word & ~bit);
+      return;
+    }
+    const auto mask = static_cast<uint8_t>(1u << (i % 8));
+    for (unsigned k = 0; k < samples_; ++k) {
+      uint8_t& b = raw_[k * sample_bytes_ + i / 8];
+      b = (code & 1u) ? static_cast<uint8_t>(b | mask) : static_cast<uint8_t>(b & ~mask);
+    }
+  }
+
  private:
   uint32_t sample_word(double t) {
     uint32_t word = 0;
@@ -126,6 +142,23 @@ class DigitalOutputs {
            mask_;
   }
   unsigned channels() const { return channels_; }
+  // 0x4nnX:03 Value (the substitute value of every channel), 0 without the object.
+  uint32_t safe_value() const {
+    return safe_ == nullptr ? 0 : static_cast<uint32_t>(safe_->get_u(3)) & mask_;
+  }
+  // Leaving OP: per channel the 0x4nn8 reaction, the guide's rule for 0x8000.
+  uint32_t substitute_word(const CardDriver& d, uint32_t current) const {
+    const uint32_t guide = safe_word(current);
+    const uint32_t value = safe_value();
+    uint32_t out = 0;
+    for (unsigned n = 0; n < channels_; ++n) {
+      const uint32_t bit =
+          output_substitute(d.output_reaction(n), (guide >> n) & 1u, (current >> n) & 1u,
+                            (value >> n) & 1u, ChannelCodes{});
+      out |= (bit & 1u) << n;
+    }
+    return out;
+  }
 
  private:
   coe::Object& out_;
@@ -160,7 +193,9 @@ class DigitalOutputDriver final : public CardDriver {
     for (size_t i = 0; i < outputs_.size(); ++i) outputs_[i].commanded = (word >> i) & 1u;
     drive_word(word);
   }
-  void apply_safe_state() override { drive_word(dout_.safe_word(driven_word(outputs_))); }
+  void apply_safe_state() override {
+    drive_word(dout_.substitute_word(*this, driven_word(outputs_)));
+  }
 
   void write_inputs(double, double) override {
     // Force-guided relays report their feedback contacts: the contact state follows the
@@ -200,7 +235,9 @@ class DioDriver final : public CardDriver {
     for (size_t i = 0; i < outputs_.size(); ++i) outputs_[i].commanded = (word >> i) & 1u;
     drive_word(word);
   }
-  void apply_safe_state() override { drive_word(dout_.safe_word(driven_word(outputs_))); }
+  void apply_safe_state() override {
+    drive_word(dout_.substitute_word(*this, driven_word(outputs_)));
+  }
 
   void write_inputs(double t, double) override {
     uint32_t word = 0;
@@ -218,6 +255,14 @@ class DioDriver final : public CardDriver {
     in_.set_u(2, 0);
     for (auto& in : inputs_) in.code = 0;
   }
+
+ protected:
+  void put_input_code(size_t i, uint32_t code) override {
+    const auto word = static_cast<uint32_t>(in_.get_u(1));
+    in_.set_u(1, (code & 1u) ? word | (1u << i) : word & ~(1u << i));
+  }
+
+ public:
   const char* input_unit() const override { return "bit"; }
   const char* output_unit() const override { return "bit"; }
 

@@ -71,6 +71,11 @@ class ThermocoupleDriver final : public CardDriver {
   }
   const char* input_unit() const override { return "degC"; }
   bool has_sensor_break() const override { return true; }
+
+ protected:
+  void put_input_code(size_t i, uint32_t code) override { slots_[i].set(code); }
+
+ public:
   bool set_parameter(std::string_view key, double value) override {
     if (key != "cold_junction_c") return false;
     cold_junction_c_ = value;
@@ -123,6 +128,10 @@ class RtdDriver final : public CardDriver {
   const char* input_unit() const override { return "degC"; }
   bool has_sensor_break() const override { return true; }
 
+ protected:
+  void put_input_code(size_t i, uint32_t code) override { slots_[i].set(code); }
+
+ public:
  private:
   coe::Object& obj_;
   std::vector<EntrySlot> slots_;

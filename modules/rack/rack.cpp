@@ -231,9 +231,7 @@ void Rack::before_inputs(mdp::Device&) {
       }
     }
   }
-  for (size_t i = 0; i < drivers_.size(); ++i) {
-    if (rim_online(module_rim_[i])) drivers_[i]->write_inputs(t - t0_, dt);
-  }
+  for (size_t i = 0; i < drivers_.size(); ++i) update_inputs(i, t - t0_, dt);
   evaluate_faults();
   channel_diag_->evaluate([this](size_t i) { return rim_online(module_rim_[i]); });
   if (t >= cpu_next_publish_) publish_cpu_temperature();
@@ -310,21 +308,25 @@ void Rack::on_detect_modules(mdp::Device& device) {
   // Guide Table 23: with Detect Modules Override 0 the command enumerates only the cards it
   // detects now, so the cards of a RIM that is not online leave 0xF050 (mdp filled it with
   // the whole rack; ETG.5001.1: the detected list holds the modules present, in order).
-  coe::Object* detected = device.dictionary().find(0xF050);
-  if (detected != nullptr && !detect_modules_override()) {
-    uint8_t n = 0;
-    for (const mdp::Module& m : device.config().modules) {
-      if (rim_online(m.rim)) detected->set_u(++n, m.card->module_ident);
-    }
-    for (uint8_t k = n + 1; k <= detected->sub0(); ++k) detected->set_u(k, 0);
-    detected->image()[0] = n;
-  }
+  // The device makes 0x3000, 0xF030 and 0x1C12/0x1C13 follow (mdp/module_enumeration.hpp).
+  enumerate(device);
   refresh();
 }
 
-void Rack::on_device_reset(mdp::Device&, bool) {
+void Rack::enumerate(mdp::Device& device) {
+  const auto modules = device.modules();
+  std::vector<uint8_t> present(modules.size(), 1);
+  if (!detect_modules_override()) {
+    for (size_t i = 0; i < modules.size(); ++i) present[i] = rim_online(modules[i].rim) ? 1 : 0;
+  }
+  device.enumerate_modules(present);
+}
+
+void Rack::on_device_reset(mdp::Device& device, bool) {
   // 0xFBF0 emulates a power cycle: outputs undriven until new valid data, latched exceptions
-  // gone (the physical causes - unplugged RIMs, faults, fans - stay as they are).
+  // gone (the physical causes - unplugged RIMs, faults, fans - stay as they are); the modules
+  // are enumerated as at system initialization (guide Table 23).
+  enumerate(device);
   for (size_t i = 0; i < drivers_.size(); ++i) drivers_[i]->de_energise();
   outputs_valid_ = false;
   publish_cpu_temperature();
@@ -410,6 +412,7 @@ void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
       // The RIM drives its outputs to the TÜV-safe level; its inputs are gone.
       d.de_energise();
       d.clear_inputs();
+      d.substitute_inputs(true);
     } else if (prev != RimState::Online && state_ == coe::EsmState::Op && outputs_valid_) {
       d.read_outputs();
     }
@@ -666,6 +669,20 @@ void Rack::sample_inputs(uint16_t module) {
   CardDriver* d = driver(module);
   if (d != nullptr && rim_online(module_rim_[module - 1])) {
     d->write_inputs(now() - t0_, options_.cycle_time_s);
+    d->substitute_inputs(false);
+  }
+}
+
+void Rack::update_inputs(size_t i, double t, double dt) {
+  CardDriver& d = *drivers_[i];
+  if (rim_online(module_rim_[i])) {
+    d.write_inputs(t, dt);
+    d.substitute_inputs(false);
+  } else {
+    // The source is missing: the card's own code (0), then the channel's substitute
+    // (mdp/substitute_values.hpp), so a reaction written meanwhile applies at once.
+    d.clear_inputs();
+    d.substitute_inputs(true);
   }
 }
 
@@ -673,9 +690,7 @@ void Rack::refresh() {
   if (state_ != coe::EsmState::SafeOp && state_ != coe::EsmState::Op) {
     // No process data runs: sample the inputs here so SDO reads and `ctl list` are live.
     const double t = now();
-    for (size_t i = 0; i < drivers_.size(); ++i) {
-      if (rim_online(module_rim_[i])) drivers_[i]->write_inputs(t - t0_, options_.cycle_time_s);
-    }
+    for (size_t i = 0; i < drivers_.size(); ++i) update_inputs(i, t - t0_, options_.cycle_time_s);
   }
   publish_fans();
   evaluate_faults();

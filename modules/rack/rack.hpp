@@ -138,11 +138,17 @@ class Rack : public mdp::CycleListener {
   // Throws std::invalid_argument for a module or channel without outputs.
   void set_output_fault(uint16_t module, size_t channel, bool overload, bool overtemperature);
   bool detect_modules_override() const;
+  // Module enumeration (guide Table 23): with Detect Modules Override 0 the modules of the
+  // online RIMs, else all; handed to the device (mdp/module_enumeration.hpp).
+  void enumerate(mdp::Device& device);
   // Modules with process data in the current 0x1C12/0x1C13 assignment.
   bool rim_has_mapped_process_data(uint8_t rim) const;
   // Publish everything derived (fans, event status, exception tree) now; the control API
   // calls it so changes show up in PREOP too, where no process data runs.
   void refresh();
+  // Inputs of driver i at t: sampled with its RIM online, else the card's code for a missing
+  // source; then the substitute values (mdp/substitute_values.hpp).
+  void update_inputs(size_t i, double t, double dt);
   // Samples one module's inputs now (its sources at the current time), so an answer to a
   // change shows the state after it, in OP too.
   void sample_inputs(uint16_t module);

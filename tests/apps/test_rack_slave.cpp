@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <span>
 #include <string>
 #include <thread>
@@ -16,6 +17,7 @@
 #include <unistd.h>
 
 #include "apps/rack_slave/rack_loading.hpp"
+#include "mdp/firmware_image.hpp"
 #include "tests/mdp/sdo_client.hpp"
 
 namespace rackcat::apps {
@@ -131,6 +133,38 @@ TEST_F(RackSlaveTest, DeviceResetRestartsTheEscOnceTheAnswerIsRead) {
   EXPECT_EQ(restarts, 1);
   slave.poll_mailbox(reply);
   EXPECT_EQ(restarts, 1);  // once per reset
+}
+
+// Issue 17: a firmware installed (over FoE, docs/FOE.md) since power-on runs after the device
+// reset 0xFBF0; the SII image the application offers carries its revision in word 0x0C
+// (ETG.2010 Table 2), the same value as 0x1018:03.
+TEST_F(RackSlaveTest, DeviceResetPutsTheNewFirmwareRevisionIntoTheSii) {
+  RackSlave slave(default_rack(), dir_.string(), 0);
+  const auto& cm = slave.device().config().control;
+  const uint32_t old_revision = cm.revision;
+  ASSERT_EQ(sii_u32(slave.eeprom(), 0x0C), old_revision);
+  std::string error;
+  const auto file =
+      mdp::pack_firmware({cm.vendor_id, cm.product_code, 0x00020001, "2.00.1", "7a"}, {}, error);
+  ASSERT_TRUE(file) << error;
+  std::ofstream(dir_ / "firmware.rfw", std::ios::binary)
+      .write(reinterpret_cast<const char*>(file->data()),
+             static_cast<std::streamsize>(file->size()));
+  int restarts = 0;
+  slave.set_restart_handler([&] { ++restarts; });
+  to_preop(slave);
+  mdp::testing::SdoClient sdo(slave.device());
+  const std::vector<uint8_t> reset{0x74, 0x65, 0x73, 0x65, 0x72, 0x00};
+  EXPECT_EQ(sdo.download(0xFBF0, 1, reset), 0u);
+  std::array<uint8_t, 128> reply{};
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (restarts == 0 && std::chrono::steady_clock::now() < deadline) {
+    slave.poll_mailbox(reply);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_EQ(restarts, 1);
+  EXPECT_EQ(sii_u32(slave.eeprom(), 0x0C), 0x00020001u);
+  EXPECT_EQ(sdo.read_u(0x1018, 3), 0x00020001u);
 }
 
 }  // namespace

@@ -123,6 +123,44 @@ def test_firmware_update_in_boot_reports_the_new_version_after_a_power_cycle(rac
     master.close()
 
 
+def test_device_reset_after_a_firmware_update_runs_the_new_version(rackcat, tmp_path):
+    """The device reset 0xFBF0 (ETG.5003.1) restarts the firmware like a power cycle: after a
+    foe_write in BOOT, back to PREOP still reports the old version; once the reset has run and
+    the master has scanned again, 0x100A, 0x1018:03 and 0x2000:02 report the new one (a version
+    text of another length than the old one: 0x100A is re-created)."""
+    fw = pack(tmp_path, "2.10.0-rc1", 0x00020100, "8c", b"new firmware")
+    rc = rackcat()
+    master = open_master(rc.iface)
+    s = master.slaves[0]
+    enter_boot(s)
+    assert foe_write(s, FW_NAME, fw), rc.log()
+    leave_boot(s)
+    master.close()
+    master = open_master(rc.iface)  # a new scan: the standard mailbox, PREOP
+    s = master.slaves[0]
+    assert sdo_text(s, 0x100A, 0) == "1.09.6"  # the old firmware runs until the reset
+    assert sdo_u32(s, 0x1018, 3) == 0x00010009
+    s.sdo_write(0xFBF0, 1, b"teser\x00")
+    deadline = time.monotonic() + 3.0
+    while time.monotonic() < deadline:
+        master.read_state()
+        if s.state == pysoem.INIT_STATE:
+            break
+        time.sleep(0.01)
+    assert s.state == pysoem.INIT_STATE and s.al_status == 0, (hex(s.state), hex(s.al_status))
+    master.close()
+    master = open_master(rc.iface)
+    s = master.slaves[0]
+    assert sdo_text(s, 0x100A, 0) == "2.10.0-rc1"
+    assert sdo_u32(s, 0x1018, 3) == 0x00020100
+    assert sdo_text(s, 0x2000, 2) == "8c"
+    enter_boot(s)
+    assert s.foe_read(FW_NAME, FOE_PASSWORD, len(fw) + 1, FOE_TIMEOUT_US) == fw
+    leave_boot(s)
+    master.close()
+    rc.stop()
+
+
 def test_bad_firmware_files_are_refused_with_their_foe_error_and_change_nothing(rackcat, tmp_path):
     good = pack(tmp_path, "3.0.0", 0x00030000, "", b"x" * 5000, name="good")
     corrupt = bytearray(good)

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "mdp/device.hpp"
+#include "mdp/firmware_image.hpp"
 #include "mdp/parameter_store.hpp"
 #include "sdo_client.hpp"
 
@@ -194,6 +195,43 @@ TEST_F(Commands, DeviceResetIsReportedToListeners) {
   EXPECT_EQ(l.resets, 1);
   EXPECT_FALSE(l.factory);
   device->remove_listener(&l);
+}
+
+// Issue 17: the device reset 0xFBF0 restarts the firmware, so a container installed since
+// power-on (as a FoE write in BOOT leaves it: firmware.rfw in the state directory, docs/FOE.md)
+// reports its versions afterwards: 0x100A, 0x1018:03, 0x2000:02 - as a restart of the process
+// does. Before the reset the old firmware still runs.
+TEST_F(Commands, DeviceResetRunsTheFirmwareInstalledSincePowerOn) {
+  const auto& cm = device->config().control;
+  const std::string old_version = sdo->read_text(0x100A, 0);
+  const uint64_t old_revision = sdo->read_u(0x1018, 3);
+  ASSERT_EQ(old_version, "1.09.6");
+  std::string error;
+  const auto file = pack_firmware(
+      {cm.vendor_id, cm.product_code, 0x00020001, "2.00.1-longer-text", "7a"}, {}, error);
+  ASSERT_TRUE(file) << error;
+  std::ofstream(dir + "/firmware.rfw", std::ios::binary)
+      .write(reinterpret_cast<const char*>(file->data()),
+             static_cast<std::streamsize>(file->size()));
+  EXPECT_EQ(sdo->read_text(0x100A, 0), old_version);
+  EXPECT_EQ(sdo->read_u(0x1018, 3), old_revision);
+  ASSERT_EQ(command(0xFBF0, kDeviceReset), 0u);
+  EXPECT_EQ(sdo->read_text(0x100A, 0), "2.00.1-longer-text");
+  EXPECT_EQ(sdo->read_u(0x1018, 3), 0x00020001u);
+  EXPECT_EQ(read(0x2000, 0x02), (std::vector<uint8_t>{'7', 'a', 0, 0}));
+  EXPECT_EQ(device->config().control.revision, 0x00020001u);
+  // A second reset keeps it; a restart of the process reports the same.
+  ASSERT_EQ(command(0xFBF0, kDeviceReset), 0u);
+  EXPECT_EQ(sdo->read_text(0x100A, 0), "2.00.1-longer-text");
+  restart();
+  EXPECT_EQ(sdo->read_text(0x100A, 0), "2.00.1-longer-text");
+  EXPECT_EQ(sdo->read_u(0x1018, 3), 0x00020001u);
+  // The container removed (a damaged one is ignored the same way): the reset runs the built-in
+  // version of the rack file again.
+  std::filesystem::remove(dir + "/firmware.rfw");
+  ASSERT_EQ(command(0xFBF0, kDeviceReset), 0u);
+  EXPECT_EQ(sdo->read_text(0x100A, 0), old_version);
+  EXPECT_EQ(sdo->read_u(0x1018, 3), old_revision);
 }
 
 std::vector<uint8_t> stored_payload(const std::string& file) {
