@@ -46,6 +46,7 @@ def test_scan_with_a_rim_offline_then_op_from_scratch(rackcat):
     master = open_master(rc.iface, 1)
     try:
         s = master.slaves[0]
+        s.add_emergency_callback(lambda e: None)  # the RIM loss sends 0xA001
         s.sdo_write(0x2000, 0x0B, b"\x00")  # Detect Modules Override 0
         rc.cli("unplug", "--rim", 2)
         assert run_command(s, 0xF002, SCAN) == 200  # scan complete
@@ -61,6 +62,7 @@ def test_device_reset_with_a_rim_offline_then_op_from_scratch(rackcat):
     master = open_master(rc.iface, 1)
     try:
         s = master.slaves[0]
+        s.add_emergency_callback(lambda e: None)  # the RIM loss sends 0xA001
         s.sdo_write(0x2000, 0x0B, b"\x00")
         assert store_parameters(s) == 0  # Override 0 survives the reset
         rc.cli("unplug", "--rim", 2)
@@ -75,6 +77,7 @@ def test_device_reset_with_a_rim_offline_then_op_from_scratch(rackcat):
         master.close()
         master = open_master(rc.iface, 1)
         s = master.slaves[0]
+        s.add_emergency_callback(lambda e: None)
         check_consistent(s, RIM1_MODULES)
         reach_op(master)
     finally:

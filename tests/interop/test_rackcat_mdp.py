@@ -127,8 +127,10 @@ def request_safeop(master):
 def test_detect_modules_after_rim_loss_and_configured_list(rackcat):
     """Configured (0xF030) versus detected (0xF050) modules. With Detect Modules Override 0,
     the Detect Modules command enumerates only the cards it detects now (guide Table 23): RIM
-    2 unplugged -> 0xF050 holds RIM 1's 19 modules, and PREOP -> SAFEOP is refused with AL
-    status code 0x0070 while 0xF030 still lists 27 (ETG.5001.1); back to normal after replug."""
+    2 unplugged -> 0xF050 holds RIM 1's 19 modules, and the default configured list 0xF030
+    follows it (mdp/module_enumeration.hpp, issue 15 item 6), so PREOP -> SAFEOP is accepted;
+    after the replug and a new scan all 27 again. A configured list that contradicts the
+    detected one is refused (0x06090033 over SDO; AL 0x0070 on PREOP -> SAFEOP, ETG.5001.1)."""
     rc = rackcat()
     master = open_master(rc.iface, 1)
     try:
@@ -144,17 +146,21 @@ def test_detect_modules_after_rim_loss_and_configured_list(rackcat):
         rc.cli("unplug", "--rim", 2)
         assert detect_modules(s) == 200  # guide Appendix A: 200 = command 100 % done
         assert module_list(s, 0xF050) == DEFAULT_IDENTS[:19]
+        assert module_list(s, 0xF030) == DEFAULT_IDENTS[:19]
         master.config_map()
         s = request_safeop(master)
-        assert s.state == pysoem.PREOP_STATE | pysoem.STATE_ERROR, hex(s.state)
-        assert s.al_status == 0x0070, hex(s.al_status)
-        s.state = pysoem.PREOP_STATE | pysoem.STATE_ACK
-        s.write_state()
-        assert master.state_check(pysoem.PREOP_STATE, 2_000_000) == pysoem.PREOP_STATE
+        assert s.state == pysoem.SAFEOP_STATE, (hex(s.state), hex(s.al_status))
+        go(master, pysoem.PREOP_STATE)
 
         rc.cli("replug", "--rim", 2)
         assert detect_modules(s) == 200  # guide Appendix A: 200 = command 100 % done
         assert module_list(s, 0xF050) == DEFAULT_IDENTS
+        assert module_list(s, 0xF030) == DEFAULT_IDENTS
+        # A master starting from scratch (SOEM keeps the sizes of its first config_map).
+        assert master.config_init() == 1
+        assert master.state_check(pysoem.PREOP_STATE, 2_000_000) == pysoem.PREOP_STATE
+        master.slaves[0].add_emergency_callback(emergencies.append)
+        master.config_map()
         s = request_safeop(master)
         assert s.state == pysoem.SAFEOP_STATE, (hex(s.state), hex(s.al_status))
         go(master, pysoem.INIT_STATE)

@@ -127,6 +127,8 @@ def test_output_and_input_reactions_after_a_rim_unplug(rackcat):
     master = open_master(rc.iface, 1)
     try:
         s = master.slaves[0]
+        emergencies = []
+        s.add_emergency_callback(emergencies.append)  # the RIM loss sends 0xA001
         s.sdo_write(0x2000, 0x0B, b"\x00")  # Detect Modules Override 0 (guide Table 23)
         set_output_reactions(s)
         # RIM 2's CDI-13: channel 0 substitute 1, 1 hold last, 2 zeros, 3..7 the guide (0).
