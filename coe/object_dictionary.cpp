@@ -91,9 +91,11 @@ void Object::load_defaults() {
 }
 
 bool Object::set_default(uint8_t subindex, std::span<const uint8_t> value) {
-  auto it = std::find_if(entries_.begin(), entries_.end(),
+  if (entry(subindex) == nullptr) return false;
+  // The descriptions may be shared with identically described objects: copy them first.
+  std::vector<Entry>& list = writable_entries();
+  auto it = std::find_if(list.begin(), list.end(),
                          [subindex](const Entry& e) { return e.subindex == subindex; });
-  if (it == entries_.end()) return false;
   it->default_value.assign(it->byte_length(), 0);
   std::copy_n(value.begin(), std::min(value.size(), it->default_value.size()),
               it->default_value.begin());

@@ -32,12 +32,16 @@ void set_list(coe::Object& o, const std::vector<T>& values, bool load) {
   const uint8_t n = static_cast<uint8_t>(values.size());
   const uint8_t sub0_value[1] = {n};
   o.set_default(0, sub0_value);
+  // set_default may copy shared descriptions: subindices first, then the defaults.
+  std::vector<uint8_t> subs;
   for (const auto& e : o.entries()) {
-    if (e.subindex == 0) continue;
-    const uint64_t v = e.subindex <= values.size() ? values[e.subindex - 1] : 0;
+    if (e.subindex != 0) subs.push_back(e.subindex);
+  }
+  for (const uint8_t sub : subs) {
+    const uint64_t v = sub <= values.size() ? values[sub - 1] : 0;
     uint8_t bytes[8];
     for (size_t b = 0; b < 8; ++b) bytes[b] = static_cast<uint8_t>(v >> (8 * b));
-    o.set_default(e.subindex, bytes);
+    o.set_default(sub, bytes);
   }
   if (load) o.load_defaults();
 }
