@@ -181,20 +181,9 @@ std::vector<ModuleDescription> describe_module_types() {
 std::string write_esi(const mdp::Device& device) {
   auto d = describe_device(device);
   auto sii = encode_sii(d);
-  // Module objects are defined once, in their module (ETG.2000 Modules/Module/Profile, as
-  // vendor modular devices do): the device's own Profile carries the device objects only. Its
-  // slot PDOs, marked OverwrittenByModule, still name their entries' types.
-  coe::ObjectDictionary device_objects = device.dictionary();
-  for (const auto& m : device.modules()) {
-    std::vector<uint16_t> module_objects;
-    device_objects.for_each([&](const coe::Object& obj) {
-      if (belongs_to_module(obj.index(), m.nn())) module_objects.push_back(obj.index());
-    });
-    for (const uint16_t index : module_objects) device_objects.remove(index);
-  }
   EsiContent c;
   c.device = &d;
-  c.dictionary = &device_objects;
+  c.dictionary = &device.dictionary();
   c.config_data = encode_config_area(d.config);
   c.eeprom_bytes = sii.bytes.size();
   c.modules = describe_module_types();
