@@ -141,7 +141,17 @@ def test_output_and_input_reactions_after_a_rim_unplug(rackcat):
         # RIM 2's CAI-11/X8: channel 0 substitute 0x1234 in all 8 samples.
         s.sdo_write(obj(RIM2_AI_MODULE, 0xA), 1, u16(SUBST))
         s.sdo_write(obj(RIM2_AI_MODULE, 0xB), 1, u16(0x1234))
+        # The status 0x4nnC in the user TxPDO 0x1B00, appended to the assignment (PREOP).
+        status_obj = obj(RIM2_DI_MODULE, 0xC)
+        s.sdo_write(0x1B00, 0, b"\x00")
+        s.sdo_write(0x1B00, 1, struct.pack("<I", status_obj << 16 | 16))
+        s.sdo_write(0x1B00, 0, b"\x01")
+        n = s.sdo_read(0x1C13, 0)[0]
+        s.sdo_write(0x1C13, 0, b"\x00")
+        s.sdo_write(0x1C13, n + 1, struct.pack("<H", 0x1B00))
+        s.sdo_write(0x1C13, 0, bytes([n + 1]))
         pdo, do, di, ao, ai = map_loopbacks(s)
+        status_pdo = pdo.find(status_obj, 0, "in")
         rim2_di = pdo.find(obj(RIM2_DI_MODULE, 1, 0x6000), 1, "in")  # DINx8 0x6nn1
         rim2_ai = [pdo.find(obj(RIM2_AI_MODULE, 8, 0x6000), 1, "in")]  # 8 samples of channel 0
         master.config_map()
@@ -167,10 +177,12 @@ def test_output_and_input_reactions_after_a_rim_unplug(rackcat):
         assert samples == int.from_bytes(bytes.fromhex("3412" * 8), "little"), hex(samples)
         status = struct.unpack("<H", s.sdo_read(obj(RIM2_DI_MODULE, 0xC), 0))[0]
         assert status == 0xFF, hex(status)
+        assert get_bits(s.input, status_pdo) == 0xFF  # the same in the process data
         rc.cli_while_cycling(master, "replug", "--rim", 2)
         run_cycles(master, 300, until=lambda _: get_bits(s.input, rim2_di) == 0x06)
         assert get_bits(s.input, rim2_di) == 0x06
         assert struct.unpack("<H", s.sdo_read(obj(RIM2_DI_MODULE, 0xC), 0))[0] == 0
+        assert get_bits(s.input, status_pdo) == 0
         ack_error_and_init(master, pysoem.SAFEOP_STATE)
     finally:
         master.close()
