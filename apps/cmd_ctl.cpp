@@ -43,6 +43,8 @@ struct CtlOptions {
   double celsius = 0.0;
   bool now = false;
   std::string fault;
+  std::optional<int64_t> encoder_steps;
+  bool encoder_clear = false;
   bool open = false;
   bool close = false;
   std::optional<double> loop_ohms;
@@ -435,6 +437,18 @@ void add_ctl(CLI::App& app) {
       body[key] = *v == "true";
     }
     request(*o, "POST", "/api/output_fault", body, print_diagnosis);
+  });
+
+  CLI::App* ef = command(ctl, o, "encoder-fault",
+                         "encoder card fault: hardware error, position jump, frozen position");
+  ef->add_option("--module", o->module, "module number")->required();
+  ef->add_option("--fault", o->fault, "hardware, jump or frozen")->required();
+  ef->add_option("--steps", o->encoder_steps, "physical steps a jump adds (default 1000)");
+  ef->add_flag("--clear", o->encoder_clear, "remove the fault instead");
+  ef->callback([o] {
+    json body{{"module", o->module}, {"fault", o->fault}, {"active", !o->encoder_clear}};
+    if (o->encoder_steps) body["steps"] = *o->encoder_steps;
+    request(*o, "POST", "/api/encoder_fault", body, print_diagnosis);
   });
 
   CLI::App* wf = command(ctl, o, "wiring-fault", "force a wiring fault on a sourcing output");

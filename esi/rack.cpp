@@ -43,10 +43,11 @@ DeviceTexts rack_texts(const mdp::RackConfig& config) {
   return t;
 }
 
-// Module objects live in 0x3nn1..0x7nnX (ETG.5001.1 §4, docs/MDP.md); nibble 0 of the 0x3000
-// area is the device's module ident list 0x3000, not a module object.
+// Module objects live in 0x3nn1..0x7nnX and, for encoder cards, the configuration and
+// information areas 0x8nnX / 0x9nnX (ETG.5001.1 §4, docs/MDP.md, docs/ENCODER.md); nibble 0 of
+// the 0x3000 area is the device's module ident list 0x3000, not a module object.
 bool belongs_to_module(uint16_t index, uint16_t nn) {
-  if (index < 0x3000 || index > 0x7FFF) return false;
+  if (index < 0x3000 || index > 0x9FFF) return false;
   if (((index >> 4) & 0xFF) != nn) return false;
   return !(index >= 0x3000 && index <= 0x3FFF && (index & 0xF) == 0);
 }

@@ -14,7 +14,7 @@ using coe::DataType;
 
 // Appendix A: 0x6nn0..0x6nnC and 0x7nn0..0x7nn3, 0x7nnB with their mapping objects 0x1A0X /
 // 0x160X. Sample arrays ("ARRAY [0..7] OF UINT") are OCTET_STRING entries of the array's size.
-constexpr std::array<IoLayout, 18> kLayouts{{
+constexpr std::array<IoLayout, 20> kLayouts{{
     {IoKind::DinX16, false, "DINx16 (inputs)", "TxPDO Mapping (DINx16)", 1, 16,
      DataType::Unsigned16, 0, "DIN[15..0]", 0},
     {IoKind::DinX8, false, "DINx8 (inputs)", "TxPDO Mapping (DINx8)", 1, 8, DataType::Unsigned8, 0,
@@ -51,6 +51,24 @@ constexpr std::array<IoLayout, 18> kLayouts{{
      DataType::Unsigned16, 0, "AOUT[{}]", 0},
     {IoKind::DinX4, true, "DOUTx4 (outputs)", "RxPDO Mapping (DOUTx4)", 1, 4, DataType::Bit4, 4,
      "DOUT[3..0]", 0},
+    // Not Appendix A: the absolute encoder's fixed telegram (fields below, docs/ENCODER.md).
+    {IoKind::Encoder, false, "ENC (inputs)", "TxPDO Mapping (ENC)", 5, 0, DataType{}, 0, "", 0},
+    {IoKind::Encoder, true, "ENC (outputs)", "RxPDO Mapping (ENC)", 2, 0, DataType{}, 0, "", 0},
+}};
+
+// Encoder guide "Standard Telegram 83" (signal list "Signal list for Cyclic Data Transmission":
+// lengths and signs): actual values ZSW2_ENC, G1_ZSW1, G1_XIST1, G1_XIST2, NIST_B; setpoints
+// STW2_ENC, G1_STW1. Little-endian CoE entries instead of PROFINET's big-endian words.
+constexpr std::array<IoField, 5> kEncoderInputs{{
+    {"ZSW2_ENC", DataType::Unsigned16, 16},
+    {"G1_ZSW1", DataType::Unsigned16, 16},
+    {"G1_XIST1", DataType::Unsigned32, 32},
+    {"G1_XIST2", DataType::Unsigned32, 32},
+    {"NIST_B", DataType::Integer32, 32},
+}};
+constexpr std::array<IoField, 2> kEncoderOutputs{{
+    {"STW2_ENC", DataType::Unsigned16, 16},
+    {"G1_STW1", DataType::Unsigned16, 16},
 }};
 
 constexpr auto DO = ChannelClass::DigitalOutput;
@@ -64,7 +82,7 @@ constexpr std::optional<SafeStateKind> kNoSafe = std::nullopt;
 // Columns: card ID, name, description, Table 3/5 wording, module ident, channels, min V, max V,
 // channel class, signal, samples, TC type, input kind, output kind, safe state, ohms, uart,
 // in Table 3.
-const std::array<CardType, 25> kCards{{
+const std::array<CardType, 26> kCards{{
     // Table 3 cards, in Table 3 order.
     {0x3000, "CRS-14", "4xDout FG Relay", "4-Channel Force Guided Relay", 0x0064D004, 4, 0.0f,
      24.0f, DO, Signal::RelayForceGuided, 1, 0, IoKind::DinX4, IoKind::DinX4, SafeStateKind::DoutX8,
@@ -139,6 +157,13 @@ const std::array<CardType, 25> kCards{{
     {0xC000, "CDI-11/X8", "16xDin 5V 8x oversampled", "16-Channel Digital Input 8x Oversampled",
      0x0064D816, 16, 0.0f, 5.0f, DI, Signal::DigitalIn, 8, 0, IoKind::DinX16x8, kNone, kNoSafe,
      false, false, false},
+    // Not a Fusion.IO card: an absolute multi-turn rotary encoder interface after the encoder
+    // guide (../shared/reference/profinet-absolute-encoder-user-guide.txt). Card ID 0xF300 and
+    // ident family 0xE are rackcat's; the voltage range is the encoder's supply, guide
+    // "Connector power supply" US 10 - 30 V DC. One channel: the shaft.
+    {0xF300, "CAE-10", "Abs encoder 16+12 bit", "Absolute Rotary Encoder Interface", 0x0064E001, 1,
+     10.0f, 30.0f, AI, Signal::Encoder, 1, 0, IoKind::Encoder, IoKind::Encoder, kNoSafe, false,
+     false, false},
 }};
 
 bool iequal(std::string_view a, std::string_view b) {
@@ -150,8 +175,33 @@ bool iequal(std::string_view a, std::string_view b) {
 
 }  // namespace
 
+std::span<const IoField> IoLayout::fields() const {
+  if (kind != IoKind::Encoder) return {};
+  if (output) return kEncoderOutputs;
+  return kEncoderInputs;
+}
+
+uint16_t IoLayout::object_bits() const {
+  const auto f = fields();
+  if (f.empty()) return static_cast<uint16_t>(entries * entry_bits + pad_bits);
+  uint16_t bits = 0;
+  for (const IoField& x : f) bits = static_cast<uint16_t>(bits + x.bits);
+  return bits;
+}
+
+uint16_t IoLayout::bits_of(uint8_t sub) const {
+  const auto f = fields();
+  return f.empty() ? entry_bits : f[sub - 1].bits;
+}
+
+coe::DataType IoLayout::type_of(uint8_t sub) const {
+  const auto f = fields();
+  return f.empty() ? entry_type : f[sub - 1].type;
+}
+
 std::string IoLayout::entry_name(uint8_t sub) const {
   if (kind == IoKind::DioX8) return sub == 1 ? "DIN[7..0]" : "DIN RB[7..0]";
+  if (const auto f = fields(); !f.empty()) return std::string(f[sub - 1].name);
   std::string out(entry_fmt);
   const auto pos = out.find("{}");
   if (pos != std::string::npos) {

@@ -34,6 +34,15 @@ enum class IoKind : uint8_t {
   UartX4 = 0xA,    // 0x6nnA UARTx4 status words
   DinX4 = 0xB,     // 0x6nnB DINx4 / 0x7nnB DOUTx4 (BIT4 + 4-bit pad)
   DioX8 = 0xC,     // 0x6nnC DIOx8 (DIN + readback)
+  Encoder = 0xD,   // 0x6nnD / 0x7nnD absolute encoder telegram (docs/ENCODER.md), not Appendix A
+};
+
+// One mapped entry of a layout whose entries differ in size and type (the encoder's telegram:
+// encoder guide "Standard Telegram 83", signals ZSW2_ENC, G1_ZSW1, G1_XIST1, G1_XIST2, NIST_B).
+struct IoField {
+  std::string_view name;
+  coe::DataType type;
+  uint16_t bits;
 };
 
 // Layout of one 0x6nnX / 0x7nnX object and of the module's PDO mapping object: `entries`
@@ -51,10 +60,15 @@ struct IoLayout {
   std::string_view entry_fmt;  // entry name: "DIN[15..0]", "AIN[{}]", "TC[{}]" ({} = index)
   uint8_t entry_name_base;     // first value substituted for {} (0 or 1, as the guide numbers)
 
-  uint16_t object_bits() const { return static_cast<uint16_t>(entries * entry_bits + pad_bits); }
+  uint16_t object_bits() const;
   uint16_t object_bytes() const { return static_cast<uint16_t>((object_bits() + 7) / 8); }
-  // Name of mapped subindex `sub` (1..entries).
+  // Name, bit length and data type of mapped subindex `sub` (1..entries): entry_fmt /
+  // entry_bits / entry_type, or the kind's own field (fields()) where the entries differ.
   std::string entry_name(uint8_t sub) const;
+  uint16_t bits_of(uint8_t sub) const;
+  coe::DataType type_of(uint8_t sub) const;
+  // The per-entry fields of a mixed layout (IoKind::Encoder); empty for the uniform ones.
+  std::span<const IoField> fields() const;
 };
 
 // Layout of an input (output = false) or output kind; nullopt for combinations Appendix A
@@ -96,6 +110,7 @@ enum class Signal : uint8_t {
   Thermocouple,
   Rtd,
   Uart,
+  Encoder,  // absolute rotary encoder: the channel's source is the shaft angle in revolutions
 };
 
 struct CardType {
@@ -117,6 +132,8 @@ struct CardType {
   std::optional<SafeStateKind> safe_state;  // 0x4nnX
   bool thermocouple_ohms;                   // 0x5nn4
   bool uart;                                // 0x5nn5..0x5nnE
+  // Absolute rotary encoder settings 0x8nn0/0x8nn1 and information 0x9nn0 (docs/ENCODER.md).
+  bool encoder() const { return signal == Signal::Encoder; }
   // 0x3nn1:01: the physical card's type, the name without a "/X8" variant suffix.
   std::string_view io_card_type() const { return name.substr(0, name.find('/')); }
   // False for the rows that exist only in Table 5 (variants a config selects by name or by

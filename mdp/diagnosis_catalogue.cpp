@@ -35,6 +35,10 @@ constexpr std::array kTexts = {
     DiagText{0x1606, 0x0000, 0, "Module %2 channel %3: line break removed"},
     DiagText{0x1607, 0x0000, 0, "Module %2 channel %3: back below the upper limit"},
     DiagText{0x1608, 0x0000, 0, "Module %2 channel %3: back above the lower limit"},
+    DiagText{0x1801, 0x0000, 0, "Module %2: encoder hardware error removed"},
+    DiagText{0x1802, 0x0000, 0, "Module %2: encoder position jump removed"},
+    DiagText{0x1803, 0x0000, 0, "Module %2: encoder position no longer frozen"},
+    DiagText{0x1804, 0x0000, 0, "Module %2: master sign-of-life failure removed"},
     DiagText{text::kCpuFanWarning, 0x5000, kGen | kTemp, "CPU fan speed 15 % below nominal"},
     DiagText{text::kRimNotOnline, 0xA001, kGen | kComm,
              "RIM %1 connected but not online: its modules are missing"},
@@ -54,6 +58,8 @@ constexpr std::array kTexts = {
     DiagText{text::kUartParity, 0xFF73, kGen | kComm, "Module %2 UART channel %3: parity error"},
     DiagText{text::kUartTxOverflow, 0xFF74, kGen | kComm,
              "Module %2 UART channel %3: transmit buffer overflow"},
+    DiagText{text::kEncoderParameter, 0x6320, kGen | kMfg,
+             "Module %2: encoder parameter combination refused (0x8nn0 subindex %4)"},
     DiagText{text::kEmergency, 0x0000, kGen, "Emergency 0x%4"},
     DiagText{text::kCpuOverTemperature, 0x4210, kGen | kTemp,
              "CPU zone temperature at or above the limit"},
@@ -83,6 +89,15 @@ constexpr std::array kTexts = {
              "Module %2 channel %3: overtemperature"},
     DiagText{text::kLineBreak, 0xFF06, kGen | kMfg,
              "Module %2 channel %3: line break (open sensor or loop)"},
+    // CiA 301 emergency classes: 0x5000 device hardware, 0x7300 sensor, 0x8100 communication.
+    DiagText{text::kEncoderHardware, 0x5000, kGen | kMfg,
+             "Module %2: encoder hardware error (G1_XIST2 error code 0x%4)"},
+    DiagText{text::kEncoderJump, 0x7300, kGen | kMfg,
+             "Module %2: encoder position jump (G1_XIST2 error code 0x%4)"},
+    DiagText{text::kEncoderFrozen, 0x7300, kGen | kMfg,
+             "Module %2: encoder position frozen (G1_XIST2 error code 0x%4)"},
+    DiagText{text::kEncoderLifeSign, 0x8100, kGen | kComm,
+             "Module %2: master sign-of-life failures exceeded (G1_XIST2 error code 0x%4)"},
 };
 
 constexpr bool sorted_by_id() {
@@ -228,7 +243,9 @@ std::string format(const DiagText& t, uint8_t rim, uint16_t module, uint8_t chan
           out += channel == 0xFF ? std::string("-") : std::to_string(channel);
           break;
         default:
-          if (t.text_id == text::kEmergency) {
+          // Emergency codes and the encoders' G1_XIST2 error codes read in hex.
+          if (t.text_id == text::kEmergency ||
+              (((t.text_id >> 8) & 0xF) == 8 && t.text_id != text::kEncoderParameter)) {
             char hex[8];
             std::snprintf(hex, sizeof hex, "%04X", detail);
             out += hex;

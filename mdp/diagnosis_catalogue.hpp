@@ -4,8 +4,8 @@
 // (ETG.2000 DiagnosticsType) and `rackcat ctl diag` prints it.
 //
 // Text IDs: bits 15..12 the class (0x1 information, 0x4 warning, 0x8 error), bits 11..8 the
-// area (1 control module, 2 RIM, 6 I/O channel, 7 UART channel), bits 7..0 the cause; for I/O
-// channels the cause is the PROFINET/PROFIBUS ChannelErrorType of the diagnostic records
+// area (1 control module, 2 RIM, 6 I/O channel, 7 UART channel, 8 encoder), bits 7..0 the cause;
+// for I/O channels the cause is the PROFINET/PROFIBUS ChannelErrorType of the diagnostic records
 // (0x0001 short circuit, 0x0004 overload, 0x0005 overtemperature, 0x0006 line break, 0x0007
 // upper limit exceeded, 0x0008 lower limit undershot). The message saying a cause has gone
 // ("disappears", the INTERBUS Basic profile's priorities 0x81/0x82 "removed") has the same
@@ -90,6 +90,13 @@ inline constexpr uint16_t kUartOverflow = 0x4701;
 inline constexpr uint16_t kUartFraming = 0x4702;
 inline constexpr uint16_t kUartParity = 0x4703;
 inline constexpr uint16_t kUartTxOverflow = 0x4704;
+// Area 8: absolute encoder cards (docs/ENCODER.md); detail = the G1_XIST2 error code, or for a
+// refused parameter the subindex of 0x8nn0 (0 = complete access).
+inline constexpr uint16_t kEncoderParameter = 0x4805;
+inline constexpr uint16_t kEncoderHardware = 0x8801;
+inline constexpr uint16_t kEncoderJump = 0x8802;
+inline constexpr uint16_t kEncoderFrozen = 0x8803;
+inline constexpr uint16_t kEncoderLifeSign = 0x8804;
 }  // namespace text
 
 // Text ID of a channel error (area 6, class by severity).

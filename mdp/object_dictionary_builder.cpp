@@ -9,6 +9,7 @@ void build_object_dictionary(const RackConfig& config, coe::ObjectDictionary& od
   add_substitute_objects(config, od);
   add_tc_uart_objects(config, od);
   add_process_data_objects(config, od);
+  add_encoder_objects(config, od);
   add_mdp_objects(config, od);
   add_exception_objects(config, od);
   add_cdp_objects(config, od);

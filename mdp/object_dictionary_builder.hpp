@@ -27,7 +27,9 @@ void add_safe_state_objects(const RackConfig& config, coe::ObjectDictionary& od)
 void add_substitute_objects(const RackConfig& config, coe::ObjectDictionary& od);   // 0x4nn8..C
 void add_tc_uart_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0x5nnX, 0x0800+
 void add_process_data_objects(const RackConfig& config,
-                              coe::ObjectDictionary& od);                         // 0x6nnX/0x7nnX
+                              coe::ObjectDictionary& od);  // 0x6nnX/0x7nnX
+void add_encoder_objects(const RackConfig& config,
+                         coe::ObjectDictionary& od);  // 0x8nn0/0x8nn1/0x9nn0 (encoder cards)
 void add_mdp_objects(const RackConfig& config, coe::ObjectDictionary& od);        // 0xF000-0xF050
 void add_exception_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0xF380-0xF3A8
 void add_cdp_objects(const RackConfig& config, coe::ObjectDictionary& od);        // 0xF6F0-0xF9F8

@@ -28,7 +28,7 @@ Object mapping_object(const Module& m, const IoLayout& layout) {
   const uint8_t count = static_cast<uint8_t>(layout.entries + (layout.pad_bits ? 1 : 0));
   o.add(sub0(count));
   for (uint8_t s = 1; s <= layout.entries; ++s) {
-    const uint32_t value = (uint32_t{target} << 16) | (uint32_t{s} << 8) | layout.entry_bits;
+    const uint32_t value = (uint32_t{target} << 16) | (uint32_t{s} << 8) | layout.bits_of(s);
     o.add(num(s, layout.entry_name(s), DataType::Unsigned32, acc("ro"), value));
   }
   if (layout.pad_bits) {

@@ -13,15 +13,17 @@ using namespace detail;
 
 Object io_object(const Module& m, const IoLayout& l) {
   const bool has_pad = l.pad_bits != 0;
+  // Entries of different types (the encoder telegram) make a RECORD, like a padded layout.
+  const bool record = has_pad || !l.fields().empty();
   Object o(m.index(l.output ? 0x7000 : 0x6000, static_cast<uint8_t>(l.kind)),
-           has_pad ? ObjectCode::Record : ObjectCode::Array, std::string(l.name),
-           has_pad ? 0 : static_cast<uint16_t>(l.entry_type));
+           record ? ObjectCode::Record : ObjectCode::Array, std::string(l.name),
+           record ? 0 : static_cast<uint16_t>(l.entry_type));
   if (has_pad) o.set_packed(true);
   const uint16_t a = l.output ? (acc("rw") | kRx) : (acc("ro") | kTx);
   o.add(sub0(static_cast<uint8_t>(l.entries + (has_pad ? 1 : 0))));
   for (uint8_t s = 1; s <= l.entries; ++s) {
-    o.add(coe::make_entry(s, l.entry_name(s), l.entry_type, l.entry_bits, a,
-                          std::vector<uint8_t>((l.entry_bits + 7) / 8, 0)));
+    o.add(coe::make_entry(s, l.entry_name(s), l.type_of(s), l.bits_of(s), a,
+                          std::vector<uint8_t>((l.bits_of(s) + 7) / 8, 0)));
   }
   if (has_pad) o.add(pad(static_cast<uint8_t>(l.entries + 1), l.pad_bits));
   o.finalize();

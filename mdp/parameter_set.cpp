@@ -41,6 +41,11 @@ ParameterSet::ParameterSet(coe::ObjectDictionary& od, const RackConfig& config) 
          {substitute::kOutputReaction, substitute::kInputReaction, substitute::kInputValue}) {
       add_all(m.index(0x4000, nibble), 1);
     }
+    // Encoder settings and the preset's offset (encoder guide 3.11.7: stored non-volatile).
+    if (m.card->encoder()) {
+      add_all(m.index(0x8000, 0), 1);
+      add(m.index(0x8000, 1), 0x01);
+    }
   }
   for (uint16_t index : {0xF3A1, 0xF3A2, 0xF3A3, 0xF3A4, 0xF3A6, 0xF3A8}) add_all(index, 1);
   add_all(0xF030, 0);

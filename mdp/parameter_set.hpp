@@ -1,8 +1,9 @@
 // The writable non-volatile parameters 0xFBF2 stores (ETG.5003.1 "backup" parameters): IPv4
 // address 0x2000:04, event masks 0x2000:09 and 0x2rr1:07, Detect Modules Override 0x2000:0B,
 // the safe-state settings 0x4nnX, the UART configuration 0x5nn5, the exception masks 0xF3Ax and
-// the configured module list 0xF030. Captured into / applied from a flat byte payload whose
-// layout the fingerprint names (see parameter_store.hpp).
+// the configured module list 0xF030, the encoder settings 0x8nn0 and offset 0x8nn1:01. Captured
+// into / applied from a flat byte payload whose layout the fingerprint names (see
+// parameter_store.hpp).
 #pragma once
 
 #include <cstdint>

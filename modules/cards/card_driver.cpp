@@ -113,6 +113,8 @@ std::unique_ptr<CardDriver> make_driver(const mdp::Module& module, coe::ObjectDi
       return make_rtd_driver(module, od);
     case Signal::Uart:
       return make_uart_driver(module, od);
+    case Signal::Encoder:
+      return make_encoder_driver(module, od);
   }
   return nullptr;
 }

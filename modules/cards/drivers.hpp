@@ -26,6 +26,8 @@ std::unique_ptr<CardDriver> make_thermocouple_driver(const mdp::Module&, coe::Ob
 std::unique_ptr<CardDriver> make_rtd_driver(const mdp::Module&, coe::ObjectDictionary&);
 // UARTx4 (modules/cards/uart_driver.hpp).
 std::unique_ptr<CardDriver> make_uart_driver(const mdp::Module&, coe::ObjectDictionary&);
+// Absolute rotary encoder (modules/cards/encoder_driver.hpp).
+std::unique_ptr<CardDriver> make_encoder_driver(const mdp::Module&, coe::ObjectDictionary&);
 
 // Shared helpers of the drivers.
 coe::Object& require_object(coe::ObjectDictionary& od, uint16_t index, const mdp::Module& m);

@@ -938,6 +938,30 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
       return Response{200, diagnosis_json(*r)};
     });
   }
+  if (path == "/api/encoder_fault") {
+    // {module, fault: hardware|jump|frozen, active?: bool (default true), steps?: jump size}
+    if (!post) return wrong_method();
+    const auto module = static_cast<uint16_t>(integer(body, "module", 1, 255));
+    const std::string f = text(body, "fault");
+    EncoderFault fault;
+    if (f == "hardware")
+      fault = EncoderFault::Hardware;
+    else if (f == "jump")
+      fault = EncoderFault::Jump;
+    else if (f == "frozen")
+      fault = EncoderFault::Frozen;
+    else
+      throw BadRequest("'fault' must be hardware, jump or frozen");
+    const bool active = body.contains("active") ? boolean(body, "active", true) : true;
+    const int64_t steps = body.contains("steps")
+                              ? integer(body, "steps", -(int64_t{1} << 40), int64_t{1} << 40)
+                              : 1000;
+    return run([r, module, fault, active, steps] {
+      r->set_encoder_fault(module, fault, active, steps);
+      r->refresh();
+      return Response{200, diagnosis_json(*r)};
+    });
+  }
   if (path == "/api/wiring_fault") {
     if (!post) return wrong_method("POST");
     known_fields(body, path, {"module", "channel", "fault"});

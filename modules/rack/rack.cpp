@@ -13,6 +13,7 @@
 
 #include "mdp/file_root.hpp"
 #include "mdp/sync_manager_layout.hpp"
+#include "modules/cards/encoder_driver.hpp"
 #include "modules/cards/uart_driver.hpp"
 #include "modules/signals/state_space_plant.hpp"
 
@@ -81,6 +82,7 @@ Rack::Rack(mdp::Device& device, RackOptions options)
     module_rim_[m.number - 1] = m.rim;
     rims_[m.rim].modules.push_back(m.number);
     if (auto* u = dynamic_cast<UartDriver*>(drivers_[m.number - 1].get())) uarts_.push_back(u);
+    if (auto* e = dynamic_cast<EncoderDriver*>(drivers_[m.number - 1].get())) e->attach(device_);
   }
   channel_diag_ = std::make_unique<ChannelDiagnostics>(device_, drivers_);
 
@@ -560,6 +562,14 @@ void Rack::set_output_fault(uint16_t module, size_t channel, bool overload, bool
         fmt::format("module {} has {} output channels", module, d->outputs().size()));
   d->outputs()[channel].overload = overload;
   d->outputs()[channel].overtemperature = overtemperature;
+}
+
+void Rack::set_encoder_fault(uint16_t module, EncoderFault fault, bool active, int64_t jump_steps) {
+  auto* e = dynamic_cast<EncoderDriver*>(driver(module));
+  if (e == nullptr) {
+    throw std::invalid_argument(fmt::format("module {} is not an encoder card", module));
+  }
+  e->set_fault(fault, active, jump_steps);
 }
 
 void Rack::set_loop_ohms(uint16_t module, size_t channel, double ohms) {

@@ -30,6 +30,7 @@
 #include "coe/access.hpp"
 #include "mdp/device.hpp"
 #include "modules/cards/card_driver.hpp"
+#include "modules/cards/encoder_driver.hpp"
 #include "modules/rack/channel_diagnostics.hpp"
 #include "modules/rack/events.hpp"
 #include "modules/rack/exception_tree.hpp"
@@ -137,6 +138,10 @@ class Rack : public mdp::CycleListener {
   // Output overload / overtemperature of an output channel (channel diagnosis, 0x10F3).
   // Throws std::invalid_argument for a module or channel without outputs.
   void set_output_fault(uint16_t module, size_t channel, bool overload, bool overtemperature);
+  // Encoder faults (modules/cards/encoder_driver.hpp): hardware error, position jump by
+  // `jump_steps` physical steps, frozen position. Throws std::invalid_argument when the module
+  // is no encoder card.
+  void set_encoder_fault(uint16_t module, EncoderFault fault, bool active, int64_t jump_steps = 0);
   bool detect_modules_override() const;
   // Module enumeration (guide Table 23): with Detect Modules Override 0 the modules of the
   // online RIMs, else all; handed to the device (mdp/module_enumeration.hpp).

@@ -223,6 +223,7 @@ RimProfile rim_profile(const mdp::RackConfig& rack, uint8_t rim) {
         add_channels(p.inputs, s.slot, card.channels, ChannelKind::Temperature, card);
         break;
       case Signal::Uart:
+      case Signal::Encoder:  // no CiA 401 channel kind: the encoder is not carried on the CAN link
         break;
     }
     const size_t at = p.card_list.size();
