@@ -1,6 +1,7 @@
 // The absolute rotary encoder card: see encoder_driver.hpp and docs/ENCODER.md.
 #include "modules/cards/encoder_driver.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -199,17 +200,26 @@ void EncoderDriver::write_inputs(double t, double /*dt*/) {
   const uint32_t xist1 =
       s.class4 && s.preset_not_xist1 ? static_cast<uint32_t>(unshifted_) : position_;
 
-  // Velocity from the change of the count over the time between samples (3.11.11: "With each
-  // cycle will calculate the velocity from the position value"), filtered (3.11.12).
-  if (sampled_ && t > last_t_) {
-    const double steps_per_s = static_cast<double>(d - last_steps_) / (t - last_t_);
-    velocity_ = encoder::filter_velocity(s.velocity_filter, velocity_,
-                                         encoder::velocity_in_unit(hw_, s, steps_per_s));
-  }
-  if (!sampled_ || t > last_t_) {
-    last_steps_ = d;
-    last_t_ = t;
-    sampled_ = true;
+  // Velocity from the change of the count (3.11.11: "With each cycle will calculate the
+  // velocity from the position value") over the gate time, filtered every cycle (3.11.12).
+  const Sample newest = samples_[head_];
+  if (stored_ == 0 || t > newest.t) {
+    head_ = (head_ + 1) % kSamples;
+    samples_[head_] = {t, d};
+    stored_ = std::min(stored_ + 1, kSamples);
+    if (stored_ > 1) {
+      Sample from = samples_[(head_ + kSamples - stored_ + 1) % kSamples];  // the oldest
+      for (size_t age = 1; age < stored_; ++age) {
+        const Sample& x = samples_[(head_ + kSamples - age) % kSamples];
+        if (t - x.t >= kVelocityGate) {
+          from = x;
+          break;
+        }
+      }
+      const double steps_per_s = static_cast<double>(d - from.count) / (t - from.t);
+      velocity_ = encoder::filter_velocity(s.velocity_filter, velocity_,
+                                           encoder::velocity_in_unit(hw_, s, steps_per_s));
+    }
   }
 
   slave_ls_ = next_life_sign(slave_ls_);

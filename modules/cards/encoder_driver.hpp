@@ -13,6 +13,7 @@
 // set G1_ZSW1 bit 15 with their code in G1_XIST2 and raise a 0x10F3 message with its Emergency.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "mdp/device.hpp"
@@ -51,6 +52,12 @@ class EncoderDriver final : public CardDriver {
   void set_fault(EncoderFault fault, bool active, int64_t jump_steps = 0);
   bool fault(EncoderFault f) const { return (faults_ & bit(f)) != 0; }
 
+  // The velocity is the count's change over the newest stored sample at least this old (a gate
+  // time; over all stored ones while there is none): a held source (a plant steps every 1 ms)
+  // is then off by at most one plant step per gate, 5 %, rather than by 100 % between two
+  // frames that straddle a step.
+  static constexpr double kVelocityGate = 0.020;
+
   // State for `rackcat ctl list` and tests.
   uint32_t position() const { return position_; }
   double velocity() const { return velocity_; }
@@ -75,9 +82,15 @@ class EncoderDriver final : public CardDriver {
 
   // Shaft.
   int64_t steps_ = 0;  // physical steps of the last sample, after faults
-  bool sampled_ = false;
-  double last_t_ = 0.0;
-  int64_t last_steps_ = 0;  // for the velocity
+  // The samples of the last kSamples cycles (newest at head_), for the velocity.
+  struct Sample {
+    double t;
+    int64_t count;
+  };
+  static constexpr size_t kSamples = 64;
+  std::array<Sample, kSamples> samples_{};
+  size_t head_ = 0;
+  size_t stored_ = 0;
   double velocity_ = 0.0;   // filtered, in the configured unit
   uint32_t position_ = 0;   // G1_XIST2 position (with the preset)
   uint64_t unshifted_ = 0;  // position before the offset
