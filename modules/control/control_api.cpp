@@ -941,6 +941,7 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
   if (path == "/api/encoder_fault") {
     // {module, fault: hardware|jump|frozen, active?: bool (default true), steps?: jump size}
     if (!post) return wrong_method("POST");
+    known_fields(body, path, {"module", "fault", "active", "steps"});
     const auto module = static_cast<uint16_t>(integer(body, "module", 1, 255));
     const std::string f = text(body, "fault");
     EncoderFault fault;
