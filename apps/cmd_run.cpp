@@ -3,6 +3,7 @@
 //   rackcat run --iface IFACE [--config FILE] [--slaves N | --line FILE | --eni FILE --esi-dir DIR]
 //               [--busy-poll] [--pcap FILE]
 //               [--state-dir DIR] [--control-port P] [--user USER] [--rim-bus can:IFACE]
+//               [--pdi direct|lan9252-emulated]
 //
 // Parses the rack file, opens the raw socket (needs CAP_NET_RAW) and the capture file, drops
 // every privilege while the process still has a single thread (capabilities are per thread),
@@ -67,6 +68,9 @@ struct RunArgs {
   std::optional<uint32_t> foe_password;
   LogOptions log;
   LineSource line;  // a line file or an ENI (docs/LINE.md): ESI devices and racks in order
+  // How the firmware reaches each ESC: the chip model's PDI, or through the LAN9252 host-bus
+  // protocol (docs/ESC.md "The LAN9252 backend").
+  std::string pdi = "direct";
 };
 
 int run(const RunArgs& a) {
@@ -153,25 +157,27 @@ int run(const RunArgs& a) {
     std::fprintf(stderr, "%s\n", e.what());
     return ecat::kExitUsage;
   }
-  ecat::Segment segment(line);
+  ecat::SegmentOptions segment_options;
+  if (a.pdi == "lan9252-emulated") segment_options.pdi = ecat::PdiAccess::Lan9252Emulated;
+  ecat::Segment segment(line, ecat::SteadyClock::instance(), segment_options);
 
-  // A rack that must leave OP (a RIM lost with Detect Modules Override 0) asks the ESC through
+  // A rack that must leave OP (a RIM lost with Detect Modules Override 0) asks the firmware through
   // the loop, after the current frame, like a local application error (ETG.1000.6 §5.3.3).
   for (size_t r = 0; r < racks.size(); ++r) {
     const size_t i = rack_position[r];
     racks[r]->rack().set_state_request_handler(
-        [&runner, &segment, i](coe::EsmState to, uint16_t code) {
+        [&runner, &segment, i](EsmState to, uint16_t code) {
           runner.loop().post([&segment, i, to, code] {
-            segment.slave(i).esc().application_error(static_cast<ecat::AlState>(to), code);
+            segment.slave(i).firmware().application_error(to, code);
           });
         });
   }
 
-  // 0xFBF0 device reset: the rack restarts its ESC side too (back to INIT, no error).
+  // 0xFBF0 device reset: the rack restarts its firmware too (back to INIT, no error).
   for (size_t r = 0; r < racks.size(); ++r) {
     const size_t i = rack_position[r];
     racks[r]->set_restart_handler([&runner, &segment, i] {
-      runner.loop().post([&segment, i] { segment.slave(i).esc().application_restart(); });
+      runner.loop().post([&segment, i] { segment.slave(i).firmware().application_restart(); });
     });
   }
 
@@ -320,6 +326,8 @@ void add_run(CLI::App& app) {
                   "directory below which the control API reads replay files (default: none)");
   cmd->add_flag("--no-pty", args->no_ptys, "do not create UART pseudo-terminals");
   cmd->add_option("--user", args->user, "user to run as once the socket is open");
+  cmd->add_option("--pdi", args->pdi, "firmware-to-ESC access: direct or lan9252-emulated")
+      ->check(CLI::IsMember({"direct", "lan9252-emulated"}));
   cmd->add_option("--rim-bus", args->rim_bus,
                   "can:IFACE: the RIMs are CANopen nodes on this SocketCAN interface "
                   "(`rackcat rim`); default: in-process")

@@ -7,9 +7,9 @@
 #include <optional>
 #include <string_view>
 
-namespace rackcat::coe {
+#include "base/esm_state.hpp"
 
-enum class EsmState : uint8_t { Init = 1, PreOp = 2, Boot = 3, SafeOp = 4, Op = 8 };
+namespace rackcat::coe {
 
 namespace access {
 inline constexpr uint16_t kReadPreOp = 0x0001;

@@ -1,4 +1,4 @@
-// Little-endian and bit-granular copies shared by the object images, complete access and the
+// Bit-granular copies shared by the object images, complete access and the
 // process image. EtherCAT numbers bits LSB-first inside each byte and bytes in ascending
 // order (ETG.1000.4 §5.2; ETG.1000.6 §5.6.2.1.4 for complete access), so bit n of a buffer is
 // bit (n % 8) of byte n / 8.
@@ -9,37 +9,9 @@
 #include <cstring>
 #include <span>
 
-namespace rackcat::coe {
+#include "base/little_endian.hpp"
 
-inline uint16_t get_le16(const uint8_t* p) {
-  return static_cast<uint16_t>(p[0] | (p[1] << 8));
-}
-inline uint32_t get_le32(const uint8_t* p) {
-  return static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) |
-         (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
-}
-inline void put_le16(uint8_t* p, uint16_t v) {
-  p[0] = static_cast<uint8_t>(v);
-  p[1] = static_cast<uint8_t>(v >> 8);
-}
-inline void put_le32(uint8_t* p, uint32_t v) {
-  for (int i = 0; i < 4; ++i) {
-    p[i] = static_cast<uint8_t>(v >> (8 * i));
-  }
-}
-// Reads up to 8 little-endian bytes.
-inline uint64_t get_le(const uint8_t* p, size_t n) {
-  uint64_t v = 0;
-  for (size_t i = 0; i < n && i < 8; ++i) {
-    v |= static_cast<uint64_t>(p[i]) << (8 * i);
-  }
-  return v;
-}
-inline void put_le(uint8_t* p, size_t n, uint64_t v) {
-  for (size_t i = 0; i < n; ++i) {
-    p[i] = i < 8 ? static_cast<uint8_t>(v >> (8 * i)) : 0;
-  }
-}
+namespace rackcat::coe {
 
 // Copies `nbits` bits from src (starting at bit src_bit) to dst (starting at bit dst_bit);
 // bits of dst outside the range keep their value. Byte-aligned runs become one memcpy.

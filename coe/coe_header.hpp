@@ -34,14 +34,14 @@ struct CoeHeader {
     if (out.size() < kSize) {
       return false;
     }
-    put_le16(out.data(), static_cast<uint16_t>((number & 0x01FF) | ((service & 0x0F) << 12)));
+    le::put16(out.data(), static_cast<uint16_t>((number & 0x01FF) | ((service & 0x0F) << 12)));
     return true;
   }
   static std::optional<CoeHeader> decode(std::span<const uint8_t> in) {
     if (in.size() < kSize) {
       return std::nullopt;
     }
-    const uint16_t w = get_le16(in.data());
+    const uint16_t w = le::get16(in.data());
     return CoeHeader{static_cast<uint16_t>(w & 0x01FF), static_cast<uint8_t>(w >> 12)};
   }
 };

@@ -14,7 +14,7 @@ uint64_t read_bits(std::span<const uint8_t> image, size_t bit_offset, size_t bit
     return 0;
   }
   copy_bits(tmp, 0, image.data(), bit_offset, bits);
-  return get_le(tmp, 8);
+  return le::get(tmp, 8);
 }
 
 int64_t sign_extend(uint64_t raw, unsigned bits) {
@@ -90,7 +90,7 @@ AbortCode check_value(const ObjectDictionary& od, const Object& obj, const Entry
   if (!is_integer_entry(e) || value.empty()) {
     return AbortCode::None;
   }
-  const uint64_t raw = get_le(value.data(), std::min<size_t>(value.size(), 8));
+  const uint64_t raw = le::get(value.data(), std::min<size_t>(value.size(), 8));
   // A BOOLEAN/BITn value with bits beyond its width is not a value of the type.
   if (e.bit_length < 64 && e.bit_length % 8 != 0 && (raw >> e.bit_length) != 0) {
     return AbortCode::ValueRange;

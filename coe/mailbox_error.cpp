@@ -48,8 +48,8 @@ size_t write_mailbox_error(std::span<uint8_t> out, MailboxError error, uint16_t 
   h.type = static_cast<uint8_t>(MailboxType::Error);
   h.counter = counter;
   h.encode(out);
-  put_le16(&out[6], kMailboxErrorService);
-  put_le16(&out[8], static_cast<uint16_t>(error));
+  le::put16(&out[6], kMailboxErrorService);
+  le::put16(&out[8], static_cast<uint16_t>(error));
   return kTotal;
 }
 

@@ -162,7 +162,7 @@ uint64_t Object::get_u(uint8_t subindex) const {
     return 0;
   }
   copy_bits(tmp, 0, image_.data(), e->bit_offset, bits);
-  return get_le(tmp, 8);
+  return le::get(tmp, 8);
 }
 
 int64_t Object::get_i(uint8_t subindex) const {
@@ -185,7 +185,7 @@ void Object::set_u(uint8_t subindex, uint64_t value) {
     return;
   }
   uint8_t tmp[8];
-  put_le(tmp, 8, value);
+  le::put(tmp, 8, value);
   const size_t bits = std::min<size_t>(e->bit_length, 64);
   if (e->bit_offset + bits > image_.size() * 8) {
     return;

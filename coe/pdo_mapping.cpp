@@ -13,7 +13,7 @@ uint64_t entry_value(const Object& obj, uint8_t sub, std::span<const uint8_t> im
   }
   uint8_t tmp[8] = {};
   copy_bits(tmp, 0, image.data(), e->bit_offset, std::min<size_t>(e->bit_length, 64));
-  return get_le(tmp, 8);
+  return le::get(tmp, 8);
 }
 
 // The candidate image of `obj` after writing `data` to subindex `sub` (-1: data is the whole
@@ -96,7 +96,7 @@ WriteValidator pdo_mapping_validator(const ObjectDictionary& od, PdoDirection di
           return AbortCode::SubindexZeroNotZero;
         }
         if (sub >= 1) {
-          return check_mapping_entry(od, static_cast<uint32_t>(get_le(data.data(), 4)), dir);
+          return check_mapping_entry(od, static_cast<uint32_t>(le::get(data.data(), 4)), dir);
         }
         uint8_t buf[2 + 255 * 4];
         const auto img = candidate(obj, sub, data, {buf, sizeof buf});

@@ -125,7 +125,7 @@ size_t SdoServer::download_initiate(std::span<const uint8_t> body, std::span<uin
   } else {
     // Normal (Table 36): complete size, then the data; more than fits follows in segments.
     const size_t in_frame = body.size() - sdo::kInitiateBody;
-    const size_t size = (cmd & sdo::kSizeIndicated) ? get_le32(&body[4]) : in_frame;
+    const size_t size = (cmd & sdo::kSizeIndicated) ? le::get32(&body[4]) : in_frame;
     if (in_frame >= size) {
       rc = commit_download(*obj, subindex, ca, body.subspan(sdo::kInitiateBody, size), state);
     } else {
@@ -145,9 +145,9 @@ size_t SdoServer::download_initiate(std::span<const uint8_t> body, std::span<uin
   // Initiate download response (Table 37): 0x60 (| CA), index, subindex, 4 reserved bytes.
   uint8_t* b = reply.data() + kBodyOffset;
   b[0] = static_cast<uint8_t>((sdo::kScsDownloadInitiate << 5) | (ca ? sdo::kCompleteAccess : 0));
-  put_le16(b + 1, index);
+  le::put16(b + 1, index);
   b[3] = subindex;
-  put_le32(b + 4, 0);
+  le::put32(b + 4, 0);
   return finish_coe(reply, sdo::kInitiateBody, kResponse);
 }
 

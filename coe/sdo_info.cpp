@@ -68,16 +68,16 @@ size_t SdoServer::info_error(std::span<uint8_t> reply, AbortCode code) {
   uint8_t* b = reply.data() + kBodyOffset;
   b[0] = sdo_info::kErrorRequest;
   b[1] = 0;
-  put_le16(b + 2, 0);
-  put_le32(b + 4, static_cast<uint32_t>(code));
+  le::put16(b + 2, 0);
+  le::put32(b + 4, static_cast<uint32_t>(code));
   return finish_coe(reply, sdo_info::kHeaderSize + 4, kService);
 }
 
 size_t SdoServer::describe_object(const Object& obj) {
   // §5.6.3.5.2: index, data type, max subindex, object code, name.
   uint8_t* p = info_buf_.data();
-  put_le16(p, obj.index());
-  put_le16(p + 2, object_data_type(obj));
+  le::put16(p, obj.index());
+  le::put16(p + 2, object_data_type(obj));
   p[4] = obj.max_subindex();
   p[5] = static_cast<uint8_t>(obj.code());
   const size_t name = std::min(obj.name().size(), info_buf_.size() - 6);
@@ -89,11 +89,11 @@ size_t SdoServer::describe_entry(const Object& obj, const Entry& e, uint8_t valu
   // §5.6.3.6.2: index, subindex, value info, data type, bit length, object access, then the
   // requested values (unit type, default, minimum, maximum) and the name.
   uint8_t* p = info_buf_.data();
-  put_le16(p, obj.index());
+  le::put16(p, obj.index());
   p[2] = e.subindex;
-  put_le16(p + 4, e.data_type);
-  put_le16(p + 6, e.bit_length);
-  put_le16(p + 8, e.access);
+  le::put16(p + 4, e.data_type);
+  le::put16(p + 6, e.bit_length);
+  le::put16(p + 8, e.access);
   size_t pos = 10;
   uint8_t given = 0;
   const size_t len = e.byte_length();
@@ -102,7 +102,7 @@ size_t SdoServer::describe_entry(const Object& obj, const Entry& e, uint8_t valu
     value_info &= sdo_info::kValueUnitType;
   }
   if (value_info & sdo_info::kValueUnitType) {
-    put_le16(p + pos, e.unit_type);
+    le::put16(p + pos, e.unit_type);
     pos += 2;
     given |= sdo_info::kValueUnitType;
   }
@@ -117,12 +117,12 @@ size_t SdoServer::describe_entry(const Object& obj, const Entry& e, uint8_t valu
   // Minimum and maximum exist for integer types only (REAL and strings have none here).
   const bool ranged = is_integer_entry(e) && len <= 8;
   if ((value_info & sdo_info::kValueMinimum) && ranged) {
-    put_le(p + pos, len, static_cast<uint64_t>(effective_min(e)));
+    le::put(p + pos, len, static_cast<uint64_t>(effective_min(e)));
     pos += len;
     given |= sdo_info::kValueMinimum;
   }
   if ((value_info & sdo_info::kValueMaximum) && ranged) {
-    put_le(p + pos, len, static_cast<uint64_t>(effective_max(e)));
+    le::put(p + pos, len, static_cast<uint64_t>(effective_max(e)));
     pos += len;
     given |= sdo_info::kValueMaximum;
   }
@@ -136,7 +136,7 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
   const uint8_t opcode = body[0] & 0x7F;
   // Requests are never fragmented (§5.6.3.2): an incomplete flag or fragments left is a
   // malformed SDO Information header.
-  if ((body[0] & sdo_info::kIncomplete) || get_le16(&body[2]) != 0) {
+  if ((body[0] & sdo_info::kIncomplete) || le::get16(&body[2]) != 0) {
     return mailbox_error(reply, MailboxError::InvalidHeader, 0);
   }
   const auto data = body.subspan(sdo_info::kHeaderSize);
@@ -149,7 +149,7 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
       if (data.size() < 2) {
         return mailbox_error(reply, MailboxError::SizeTooShort, 0);
       }
-      const uint16_t list_type = get_le16(data.data());
+      const uint16_t list_type = le::get16(data.data());
       if (list_type > sdo_info::kListSettings) {
         return info_error(reply, AbortCode::UnsupportedAccess);
       }
@@ -157,9 +157,9 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
         // §5.6.3.3.2: list type 0 answers with the length of lists 1..5 (fragmented like any
         // other answer when the mailbox is small).
         uint8_t* p = info_buf_.data();
-        put_le16(p, list_type);
+        le::put16(p, list_type);
         for (uint16_t t = 1; t <= 5; ++t) {
-          put_le16(p + 2 * t, static_cast<uint16_t>(list_count(t)));
+          le::put16(p + 2 * t, static_cast<uint16_t>(list_count(t)));
         }
         return start_fragments(reply, InfoKind::Buffer, sdo_info::kGetOdListResponse, 12, fragment);
       }
@@ -170,7 +170,7 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
       if (data.size() < 2) {
         return mailbox_error(reply, MailboxError::SizeTooShort, 0);
       }
-      const Object* obj = od_.find(get_le16(data.data()));
+      const Object* obj = od_.find(le::get16(data.data()));
       if (!obj) {
         return info_error(reply, AbortCode::ObjectNotFound);
       }
@@ -181,7 +181,7 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
       if (data.size() < 4) {
         return mailbox_error(reply, MailboxError::SizeTooShort, 0);
       }
-      const Object* obj = od_.find(get_le16(data.data()));
+      const Object* obj = od_.find(le::get16(data.data()));
       if (!obj) {
         return info_error(reply, AbortCode::ObjectNotFound);
       }
@@ -243,7 +243,7 @@ size_t SdoServer::info_fragment(std::span<uint8_t> reply) {
   uint8_t* b = reply.data() + kBodyOffset;
   b[0] = static_cast<uint8_t>(info_.opcode | (more ? sdo_info::kIncomplete : 0));
   b[1] = 0;
-  put_le16(b + 2, more ? info_.fragments_left : 0);
+  le::put16(b + 2, more ? info_.fragments_left : 0);
   uint8_t* out = b + sdo_info::kHeaderSize;
   if (info_.kind == InfoKind::Buffer) {
     std::memcpy(out, info_buf_.data() + info_.sent, chunk);
@@ -260,7 +260,7 @@ size_t SdoServer::info_fragment(std::span<uint8_t> reply) {
         // The dictionary cannot shrink mid-list on the request path; guard anyway.
         value = info_.cursor < od_.size() ? od_.at(info_.cursor++).index() : 0;
       }
-      put_le16(out + 2 * i, value);
+      le::put16(out + 2 * i, value);
     }
   }
   info_.sent += chunk;

@@ -73,9 +73,9 @@ size_t SdoServer::abort(std::span<uint8_t> reply, uint16_t index, uint8_t subind
   transfer_ = {};
   uint8_t* b = reply.data() + MailboxHeader::kSize + CoeHeader::kSize;
   b[0] = sdo::kAbortCommand;
-  put_le16(b + 1, index);
+  le::put16(b + 1, index);
   b[3] = subindex;
-  put_le32(b + 4, static_cast<uint32_t>(code));
+  le::put32(b + 4, static_cast<uint32_t>(code));
   return finish_coe(reply, 8, static_cast<uint8_t>(CoeService::SdoRequest));
 }
 
@@ -162,14 +162,14 @@ size_t SdoServer::sdo_request(std::span<const uint8_t> body, std::span<uint8_t> 
       return 0;
     default:
       // Block transfers (5, 6) and 7 do not exist in CoE.
-      return abort(reply, get_le16(&body[1]), body[3], AbortCode::CommandSpecifier);
+      return abort(reply, le::get16(&body[1]), body[3], AbortCode::CommandSpecifier);
   }
 }
 
 SdoServer::InitiateRequest SdoServer::begin_initiate(std::span<const uint8_t> body) {
   transfer_ = {};
   const uint8_t cmd = body[0];
-  const uint16_t index = get_le16(&body[1]);
+  const uint16_t index = le::get16(&body[1]);
   return {cmd, index, body[3], (cmd & sdo::kCompleteAccess) != 0, od_.find(index)};
 }
 
@@ -185,7 +185,7 @@ size_t SdoServer::poll(std::span<uint8_t> reply) {
   if (emergencies_.pop(e)) {
     // ETG.1000.6 §5.6.4: error code, error register, 5 data bytes after the CoE header.
     uint8_t* b = reply.data() + MailboxHeader::kSize + CoeHeader::kSize;
-    put_le16(b, e.error_code);
+    le::put16(b, e.error_code);
     b[2] = e.error_register;
     std::copy(e.data.begin(), e.data.end(), b + 3);
     return finish_coe(reply, 8, static_cast<uint8_t>(CoeService::Emergency));

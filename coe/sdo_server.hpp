@@ -1,6 +1,7 @@
 // The CoE SDO server of one slave (ETG.1000.6 §5.6): takes a whole mailbox request (mailbox
 // header included) and writes the whole reply mailbox. It knows nothing of the ESC: the
-// device calls handle() from ecat::Application::on_mailbox and poll() from poll_mailbox.
+// device registers it as the firmware's CoE mailbox protocol (handle() for requests, poll()
+// for unsolicited messages).
 //
 // Services: SDO upload/download (expedited, normal, segmented, complete access both ways),
 // SDO Information (OD list of all six list types, object and entry descriptions, fragmented),

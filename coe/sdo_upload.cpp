@@ -43,9 +43,9 @@ size_t SdoServer::upload_initiate(std::span<const uint8_t> body, std::span<uint8
       // Expedited (Table 38): 0x43 | (4 - n) << 2, data in the 4 bytes after the subindex.
       b[0] = static_cast<uint8_t>((sdo::kScsUploadInitiate << 5) | sdo::kExpedited |
                                   sdo::kSizeIndicated | ((4 - n) << 2));
-      put_le16(b + 1, index);
+      le::put16(b + 1, index);
       b[3] = subindex;
-      put_le32(b + 4, 0);
+      le::put32(b + 4, 0);
       copy_bits(b + 4, 0, obj->image().data(), entry->bit_offset, entry->bit_length);
       return finish_coe(reply, sdo::kInitiateBody, kResponse);
     }
@@ -71,9 +71,9 @@ size_t SdoServer::upload_initiate(std::span<const uint8_t> body, std::span<uint8
     copy_bits(dst, 0, obj->image().data(), entry->bit_offset, entry->bit_length);
   }
   b[0] = static_cast<uint8_t>((sdo::kScsUploadInitiate << 5) | sdo::kSizeIndicated | ca_bit);
-  put_le16(b + 1, index);
+  le::put16(b + 1, index);
   b[3] = subindex;
-  put_le32(b + 4, static_cast<uint32_t>(n));
+  le::put32(b + 4, static_cast<uint32_t>(n));
   size_t first = n;
   if (n > room) {
     first = room;

@@ -2,6 +2,8 @@
 // process data per the PDO assignment (ETG.1000.6 §5.6.7.4).
 #include "device/generic_device.hpp"
 
+#include "ecat/slave/mailbox_server.hpp"
+
 #include "esi/describe_dictionary.hpp"
 #include "esi/sii_image.hpp"
 
@@ -69,8 +71,8 @@ void GenericDevice::add_wire(const GenericDevice& source, size_t from_bit, size_
   wires_.push_back({&source, from_bit, to_bit, bits});
 }
 
-uint16_t GenericDevice::on_state_request(ecat::AlState from, ecat::AlState to) {
-  if (image_ && from == ecat::AlState::PreOp && to == ecat::AlState::SafeOp) {
+uint16_t GenericDevice::on_state_request(EsmState from, EsmState to) {
+  if (image_ && from == EsmState::PreOp && to == EsmState::SafeOp) {
     // The assignment may have changed in PREOP: recompile (ETG.1000.6 Table 11 0x001D/0x001E
     // are the ESC's SM checks against process_data_sizes()).
     if (image_->compile() != coe::AbortCode::None) return 0x0024;  // invalid input mapping
@@ -83,18 +85,22 @@ uint16_t GenericDevice::on_state_request(ecat::AlState from, ecat::AlState to) {
   return 0;
 }
 
-void GenericDevice::on_state_changed(ecat::AlState, ecat::AlState to) {
+void GenericDevice::on_state_changed(EsmState, EsmState to) {
   state_ = to;
-  if (to == ecat::AlState::Init && sdo_) sdo_->reset();
+  if (to == EsmState::Init && sdo_) sdo_->reset();
 }
 
-size_t GenericDevice::on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
-  if (!sdo_) return 0;
-  return sdo_->handle(request, reply, static_cast<coe::EsmState>(state_));
+void GenericDevice::add_mailbox_protocols(ecat::MailboxServer& server) {
+  server.add(ecat::mailbox_type::kCoE, coe_mailbox_);
 }
 
-size_t GenericDevice::poll_mailbox(std::span<uint8_t> reply) {
-  return sdo_ ? sdo_->poll(reply) : 0;
+size_t GenericDevice::CoeMailbox::on_request(std::span<const uint8_t> request,
+                                             std::span<uint8_t> reply, EsmState state) {
+  return device.sdo_ ? device.sdo_->handle(request, reply, state) : 0;
+}
+
+size_t GenericDevice::CoeMailbox::poll(std::span<uint8_t> reply) {
+  return device.sdo_ ? device.sdo_->poll(reply) : 0;
 }
 
 void GenericDevice::update_inputs(std::span<uint8_t> inputs) {

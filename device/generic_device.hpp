@@ -15,6 +15,7 @@
 #include "coe/sdo_server.hpp"
 #include "device/esi_device.hpp"
 #include "ecat/application.hpp"
+#include "ecat/slave/mailbox_protocol.hpp"
 
 namespace rackcat::device {
 
@@ -37,10 +38,9 @@ class GenericDevice final : public ecat::Application {
   void add_wire(const GenericDevice& source, size_t from_bit, size_t to_bit, size_t bits);
 
   std::span<const uint8_t> eeprom() const override { return sii_; }
-  uint16_t on_state_request(ecat::AlState from, ecat::AlState to) override;
-  void on_state_changed(ecat::AlState from, ecat::AlState to) override;
-  size_t on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) override;
-  size_t poll_mailbox(std::span<uint8_t> reply) override;
+  uint16_t on_state_request(EsmState from, EsmState to) override;
+  void on_state_changed(EsmState from, EsmState to) override;
+  void add_mailbox_protocols(ecat::MailboxServer& server) override;
   void update_inputs(std::span<uint8_t> inputs) override;
   void on_outputs(std::span<const uint8_t> outputs) override;
   void on_watchdog_expired() override;
@@ -50,7 +50,16 @@ class GenericDevice final : public ecat::Application {
   std::vector<uint8_t> sii_;
   std::unique_ptr<coe::SdoServer> sdo_;
   std::unique_ptr<coe::ProcessImage> image_;
-  ecat::AlState state_ = ecat::AlState::Init;
+  EsmState state_ = EsmState::Init;
+  // The SDO server as the firmware's CoE mailbox protocol (ETG.1000.6 §5.6).
+  struct CoeMailbox final : ecat::MailboxProtocol {
+    explicit CoeMailbox(GenericDevice& d) : device(d) {}
+    size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                      EsmState state) override;
+    size_t poll(std::span<uint8_t> reply) override;
+    GenericDevice& device;
+  };
+  CoeMailbox coe_mailbox_{*this};
   ecat::ProcessDataSizes sizes_;
   mutable std::mutex mutex_;  // guards outputs_/inputs_ against the control side
   std::vector<uint8_t> outputs_;

@@ -1,6 +1,6 @@
 #include "ecat/frame.hpp"
 
-#include "ecat/le.hpp"
+#include "base/little_endian.hpp"
 
 namespace rackcat::ecat {
 

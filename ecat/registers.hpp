@@ -95,4 +95,35 @@ inline constexpr uint16_t kDcSync1Cycle = 0x09A4;
 inline constexpr uint32_t kProcessRam = 0x1000;
 inline constexpr uint32_t kAddressSpace = 0x10000;
 
+// SyncManager n's registers and the bits of its control and status bytes (ETG.1000.4 §6.7.2
+// Table 58; the same on the EtherCAT and the PDI side).
+namespace sm {
+constexpr uint16_t base(int n) {
+  return static_cast<uint16_t>(kSm + kSmSize * n);
+}
+// Control: bits 1:0 mode (00 buffered, 10 mailbox), bits 3:2 direction (00 ECAT reads / PDI
+// writes, 01 ECAT writes / PDI reads), bit 4 ECAT event enable, bit 5 AL event enable, bit 6
+// watchdog trigger enable.
+constexpr bool is_mailbox(uint8_t control) {
+  return (control & 0x03) == 0x02;
+}
+constexpr bool ecat_writes(uint8_t control) {
+  return (control & 0x0C) == 0x04;
+}
+inline constexpr uint8_t kControlAlEvent = 0x20;
+inline constexpr uint8_t kControlWatchdog = 0x40;
+// Status: bit 0 "interrupt write" (buffer completely written), bit 1 "interrupt read" (buffer
+// completely read), bit 3 mailbox full, bits 5:4 last written buffer (11 = none).
+inline constexpr uint8_t kStatusWritten = 0x01;
+inline constexpr uint8_t kStatusRead = 0x02;
+inline constexpr uint8_t kStatusFull = 0x08;
+inline constexpr uint8_t kStatusNoBuffer = 0x30;
+// Activation (ECAT): bit 0 enable, bit 1 repeat request. PDI control: bit 0 deactivate, bit 1
+// repeat acknowledge (ETG.1000.4 §6.7.3).
+inline constexpr uint8_t kActivateEnable = 0x01;
+inline constexpr uint8_t kRepeatRequest = 0x02;
+inline constexpr uint8_t kPdiDeactivate = 0x01;
+inline constexpr uint8_t kRepeatAck = 0x02;
+}  // namespace sm
+
 }  // namespace rackcat::ecat::reg

@@ -6,17 +6,36 @@
 
 namespace rackcat::ecat {
 
+Segment::Slave::Slave(Application& app, const Clock& clock, const EscOptions& options,
+                      PdiAccess pdi)
+    : app_(app),
+      eeprom_(app),
+      esc_(eeprom_, clock, options),
+      pdi_(esc_),
+      firmware_(make_pdi(pdi), app) {
+  esc_.take_reset();  // the firmware has just started with the chip
+  firmware_.set_observer(&event_log_);
+}
+
+PdiPort& Segment::Slave::make_pdi(PdiAccess access) {
+  if (access == PdiAccess::Direct) return pdi_;
+  lan9252_ = std::make_unique<Lan9252Model>(esc_);
+  lan9252_pdi_ = std::make_unique<Lan9252Pdi>(*lan9252_);
+  if (!lan9252_pdi_->start()) throw std::runtime_error("LAN9252 model does not answer");
+  return *lan9252_pdi_;
+}
+
 Segment::Segment(std::vector<Application*> applications, const Clock& clock, SegmentOptions options)
     : clock_(clock), options_(options) {
   if (applications.empty()) throw std::invalid_argument("a segment needs at least one slave");
   const size_t n = applications.size();
-  slaves_.resize(n);
+  slaves_.reserve(n);
   for (size_t k = 0; k < n; ++k) {
     if (applications[k] == nullptr) throw std::invalid_argument("null application in segment");
     EscOptions esc = options_.esc;
     esc.power_on_local_time_ns = esc.power_on_local_time_ns + k * options_.power_on_spacing_ns;
-    slaves_[k].esc_ = std::make_unique<Esc>(*applications[k], clock_, esc);
-    slaves_[k].esc_->set_port1_link(k + 1 < n);
+    slaves_.push_back(std::make_unique<Slave>(*applications[k], clock_, esc, options_.pdi));
+    slaves_[k]->esc().set_port1_link(k + 1 < n);
   }
   // Arrival at port 0 of slave k, and the time the frame takes from entering slave k at port 0
   // to leaving it at port 0 again (through everything behind it).
@@ -44,35 +63,44 @@ size_t Segment::process(std::span<uint8_t> frame) {
   frame[6] |= 0x02;
   if (layout_.kind == FrameLayout::Kind::OtherType) return frame.size();
   const uint64_t t0 = clock_.now_ns();
-  for (Slave& s : slaves_) s.esc_->service(t0);
+  for (auto& s : slaves_) service_slave(*s, t0);
   uint8_t* base = frame.data();
   for (size_t k = 0; k < slaves_.size(); ++k) {
-    Esc& esc = *slaves_[k].esc_;
+    Slave& slave = *slaves_[k];
+    Esc& esc = slave.esc();
     esc.begin_frame({t0 + offsets_[k].port0_ns, t0 + offsets_[k].port1_ns});
     for (size_t d = 0; d < layout_.count; ++d) {
       esc.process_datagram(base + layout_.offset[d], layout_.length[d]);
     }
     if (layout_.malformed) esc.count_frame_error();
-    esc.end_frame();
+    // The frame has left this ESC: its firmware runs before the next frame arrives.
+    slave.run_firmware();
     if (!esc.forwards_to_port1()) break;  // last slave, or loop closed by DL control
   }
   return frame.size();
 }
 
+void Segment::service_slave(Slave& s, uint64_t now) {
+  // SYNC pulses and the watchdog expiry raise AL events (0x0220); the IRQ line wakes the
+  // firmware for them.
+  s.esc().service(now);
+  if (s.esc().pdi_irq()) s.run_firmware();
+}
+
 void Segment::service() {
   const uint64_t now = clock_.now_ns();
-  for (Slave& s : slaves_) s.esc_->service(now);
+  for (auto& s : slaves_) service_slave(*s, now);
 }
 
 uint64_t Segment::next_event_ns() const {
   uint64_t next = std::numeric_limits<uint64_t>::max();
-  for (const Slave& s : slaves_) next = std::min(next, s.esc_->next_event_ns());
+  for (const auto& s : slaves_) next = std::min(next, s->esc().next_event_ns());
   return next;
 }
 
 uint64_t Segment::next_sync_event_ns() const {
   uint64_t next = std::numeric_limits<uint64_t>::max();
-  for (const Slave& s : slaves_) next = std::min(next, s.esc_->next_sync_event_ns());
+  for (const auto& s : slaves_) next = std::min(next, s->esc().next_sync_event_ns());
   return next;
 }
 

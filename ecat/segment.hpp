@@ -1,6 +1,8 @@
 // A line of emulated slaves in one process: the frame enters slave 0 at port 0, passes every
 // slave's processing unit in order, and comes back out of slave 0 (ETG.1000.4 §5.1). Each
-// slave has its own ESC and Application.
+// slave is what a real one is: an ESC (ecat/esc), the firmware behind its PDI (ecat/slave)
+// and the device (Application). The firmware runs between frames and at timer events, as a
+// microcontroller does between the frames its ESC processes.
 //
 // Typical use by a link:
 //   rackcat::ecat::Segment segment({&device_a, &device_b});
@@ -18,10 +20,21 @@
 
 #include "ecat/application.hpp"
 #include "ecat/clock.hpp"
-#include "ecat/esc.hpp"
+#include "ecat/esc/esc.hpp"
+#include "ecat/esc/esc_pdi.hpp"
+#include "ecat/esc/lan9252_model.hpp"
 #include "ecat/frame.hpp"
+#include "ecat/lan9252/lan9252_pdi.hpp"
+#include "ecat/slave/esm_event_log.hpp"
+#include "ecat/slave/firmware.hpp"
 
 namespace rackcat::ecat {
+
+// How each slave's firmware reaches its ESC.
+enum class PdiAccess : uint8_t {
+  Direct,           // the chip model's PDI as such (EscPdi)
+  Lan9252Emulated,  // through the LAN9252 host-bus protocol (Lan9252Pdi over Lan9252Model)
+};
 
 struct SegmentOptions {
   // Modelled propagation (ns), used for the DC receive-time latches: through a slave from
@@ -32,20 +45,46 @@ struct SegmentOptions {
   // Slave k's local clock reads k x this at construction (slaves power up at different times).
   uint64_t power_on_spacing_ns = 1'234'567;
   EscOptions esc;  // identification and SII options of every slave
+  PdiAccess pdi = PdiAccess::Direct;
 };
 
 class Segment {
  public:
-  // One slave of the line: its ESC and the device behind it.
+  // One slave of the line: its ESC, the firmware behind the ESC's PDI and the device.
   class Slave {
    public:
-    Esc& esc() { return *esc_; }
-    const Esc& esc() const { return *esc_; }
-    Application& application() const { return esc_->application(); }
+    Slave(Application& app, const Clock& clock, const EscOptions& options, PdiAccess pdi);
+    Esc& esc() { return esc_; }
+    const Esc& esc() const { return esc_; }
+    Firmware& firmware() { return firmware_; }
+    const Firmware& firmware() const { return firmware_; }
+    Application& application() const { return app_; }
+    // The firmware's main loop, once: after the ESC reset (its reset output restarts the
+    // microcontroller), then its events.
+    void run_firmware() {
+      if (esc_.take_reset()) firmware_.power_on();
+      firmware_.poll();
+    }
 
    private:
-    friend class Segment;
-    std::unique_ptr<Esc> esc_;
+    // The EEPROM next to the ESC holds the device's SII image.
+    struct Eeprom final : SiiEeprom {
+      explicit Eeprom(Application& a) : app(a) {}
+      std::span<const uint8_t> image() const override { return app.eeprom(); }
+      void on_write(uint16_t word, std::span<const uint8_t> data) override {
+        app.on_eeprom_write(word, data);
+      }
+      Application& app;
+    };
+    PdiPort& make_pdi(PdiAccess access);
+    Application& app_;
+    Eeprom eeprom_;
+    Esc esc_;
+    EscPdi pdi_;
+    std::unique_ptr<Lan9252Model> lan9252_;
+    std::unique_ptr<Lan9252Pdi> lan9252_pdi_;
+    Firmware firmware_;
+    EsmEventLog event_log_{firmware_};  // the firmware's observer unless one is set
   };
 
   // `applications` in line order (position 0 is next to the master); they and `clock` must
@@ -71,14 +110,15 @@ class Segment {
   uint64_t next_sync_event_ns() const;
 
   size_t size() const { return slaves_.size(); }
-  Slave& slave(size_t position) { return slaves_.at(position); }
-  const Slave& slave(size_t position) const { return slaves_.at(position); }
+  Slave& slave(size_t position) { return *slaves_.at(position); }
+  const Slave& slave(size_t position) const { return *slaves_.at(position); }
   const Clock& clock() const { return clock_; }
 
  private:
+  void service_slave(Slave& s, uint64_t now);
   const Clock& clock_;
   SegmentOptions options_;
-  std::vector<Slave> slaves_;
+  std::vector<std::unique_ptr<Slave>> slaves_;
   std::vector<PassTimes> offsets_;  // per slave, relative to the frame's arrival at slave 0
   FrameLayout layout_;
 };

@@ -33,7 +33,6 @@
 namespace rackcat::mdp {
 
 using coe::AbortCode;
-using coe::EsmState;
 using coe::Object;
 
 std::string default_state_dir() {

@@ -36,7 +36,7 @@ class CycleListener {
   virtual void before_inputs(Device&) {}
   // After the ESM changed state (accepted request, error fallback, watchdog): leaving OP is
   // where outputs go to their safe state (0x4nn0..0x4nn3).
-  virtual void on_state_changed(Device&, coe::EsmState /*from*/, coe::EsmState /*to*/) {}
+  virtual void on_state_changed(Device&, EsmState /*from*/, EsmState /*to*/) {}
   // SYNC0/SYNC1 from the distributed clock (ETG.1000.4 §6.8.3).
   virtual void on_sync(Device&, int /*which*/, uint64_t /*system_time_ns*/) {}
   // SM2 watchdog expired (the ESM goes to SAFEOP with AL status 0x001B).
@@ -135,9 +135,9 @@ class Device {
   // --- ESM (ETG.1000.6 §5.3). request_state returns 0 to accept or an AL status code:
   // 0x0070 when PREOP->SAFEOP finds the configured module list 0xF030 different from the
   // detected list 0xF050 (ETG.5001.1). SM size checks (0x001D/0x001E) are the ESC's.
-  uint16_t request_state(coe::EsmState from, coe::EsmState to);
-  void state_changed(coe::EsmState from, coe::EsmState to);
-  coe::EsmState state() const;
+  uint16_t request_state(EsmState from, EsmState to);
+  void state_changed(EsmState from, EsmState to);
+  EsmState state() const;
 
   // --- Process data for the current 0x1C12/0x1C13 assignment (fixed once SAFEOP is reached).
   uint16_t output_bytes() const;  // SM2 size

@@ -41,19 +41,19 @@ FoeError FileAccess::refuse(FoeError e, const std::string& why) {
 
 FoeError FileAccess::read_file(std::string_view name, uint32_t password, size_t max_size,
                                std::vector<uint8_t>& contents) {
-  const coe::EsmState state = hooks_.state();
+  const EsmState state = hooks_.state();
   const bool firmware = is_firmware_file_name(name);
   if (!firmware && name != kParameterFileName) {
     return refuse(FoeError::NotFound, "no file " + std::string(name));
   }
   if (password != password_) return refuse(FoeError::NoRights, "wrong password");
   if (firmware) {
-    if (state != coe::EsmState::Boot) {
+    if (state != EsmState::Boot) {
       return refuse(FoeError::BootstrapOnly, "firmware is read in BOOT only");
     }
     contents = hooks_.running_firmware();
   } else {
-    if (state == coe::EsmState::Boot) {
+    if (state == EsmState::Boot) {
       return refuse(FoeError::NotBootstrap, "parameters are not served in BOOT");
     }
     contents = hooks_.parameter_file();
@@ -64,7 +64,7 @@ FoeError FileAccess::read_file(std::string_view name, uint32_t password, size_t 
 
 FoeError FileAccess::begin_write(std::string_view name, uint32_t password) {
   abort_write();
-  const coe::EsmState state = hooks_.state();
+  const EsmState state = hooks_.state();
   const bool firmware = is_firmware_file_name(name);
   if (!firmware && name != kParameterFileName) {
     return refuse(FoeError::NotFound, "no file " + std::string(name));
@@ -72,7 +72,7 @@ FoeError FileAccess::begin_write(std::string_view name, uint32_t password) {
   if (password != password_) return refuse(FoeError::NoRights, "wrong password");
   received_ = 0;
   if (firmware) {
-    if (state != coe::EsmState::Boot) {
+    if (state != EsmState::Boot) {
       return refuse(FoeError::BootstrapOnly, "firmware is written in BOOT only");
     }
     if (store_.poll_commit().busy) return refuse(FoeError::AccessDenied, "a commit is running");
@@ -82,10 +82,10 @@ FoeError FileAccess::begin_write(std::string_view name, uint32_t password) {
     reported_ = false;
     return FoeError::None;
   }
-  if (state == coe::EsmState::Boot) {
+  if (state == EsmState::Boot) {
     return refuse(FoeError::NotBootstrap, "parameters are not written in BOOT");
   }
-  if (state != coe::EsmState::PreOp) {
+  if (state != EsmState::PreOp) {
     return refuse(FoeError::AccessDenied, "parameters are written in PREOP only");
   }
   parameters_.clear();

@@ -32,7 +32,7 @@ inline constexpr size_t kMaxFirmwareFile = FirmwareStore::kMaxBytes;
 
 // What FileAccess needs from the device it serves.
 struct FileAccessHooks {
-  std::function<coe::EsmState()> state;
+  std::function<EsmState()> state;
   std::function<std::vector<uint8_t>()> parameter_file;  // the stored parameter file's bytes
   // Checks and applies a parameter file; returns the refusal (None: stored and applied).
   std::function<foe::FoeError(std::span<const uint8_t>, std::string& detail)> restore_parameters;

@@ -69,13 +69,13 @@ std::optional<std::vector<uint8_t>> pack_firmware(const FirmwareInfo& info,
   std::vector<uint8_t> out(kFirmwareHeaderSize + payload.size(), 0);
   uint8_t* h = out.data();
   std::memcpy(h, kMagic, 8);
-  coe::put_le32(h + 8, kFormat);
-  coe::put_le32(h + 12, kFirmwareHeaderSize);
-  coe::put_le32(h + 16, info.vendor_id);
-  coe::put_le32(h + 20, info.product_code);
-  coe::put_le32(h + 24, info.revision);
-  coe::put_le32(h + 28, static_cast<uint32_t>(payload.size()));
-  coe::put_le32(h + 32, crc32_of(payload));
+  le::put32(h + 8, kFormat);
+  le::put32(h + 12, kFirmwareHeaderSize);
+  le::put32(h + 16, info.vendor_id);
+  le::put32(h + 20, info.product_code);
+  le::put32(h + 24, info.revision);
+  le::put32(h + 28, static_cast<uint32_t>(payload.size()));
+  le::put32(h + 32, crc32_of(payload));
   // NUL-padded fields: the buffer is zero, the text goes in without a terminator of its own.
   std::copy(info.software_version.begin(), info.software_version.end(), h + kSoftwareVersionAt);
   std::copy(info.short_version.begin(), info.short_version.end(), h + kShortVersionAt);
@@ -83,7 +83,7 @@ std::optional<std::vector<uint8_t>> pack_firmware(const FirmwareInfo& info,
     error = "SHA-256 failed";
     return std::nullopt;
   }
-  coe::put_le32(h + kHeaderCrcAt, crc32_of({h, kHeaderCrcAt}));
+  le::put32(h + kHeaderCrcAt, crc32_of({h, kHeaderCrcAt}));
   std::copy(payload.begin(), payload.end(), out.begin() + kFirmwareHeaderSize);
   return out;
 }
@@ -100,18 +100,18 @@ foe::FoeError verify_firmware(std::span<const uint8_t> file, uint32_t vendor_id,
     detail = "not a rackcat firmware file (magic)";
     return FoeError::FileHeaderDoesNotExist;
   }
-  if (coe::get_le32(h + kHeaderCrcAt) != crc32_of({h, kHeaderCrcAt})) {
+  if (le::get32(h + kHeaderCrcAt) != crc32_of({h, kHeaderCrcAt})) {
     detail = "firmware header CRC-32 mismatch";
     return FoeError::FileHeaderDoesNotExist;
   }
-  if (coe::get_le32(h + 8) != kFormat || coe::get_le32(h + 12) != kFirmwareHeaderSize) {
+  if (le::get32(h + 8) != kFormat || le::get32(h + 12) != kFirmwareHeaderSize) {
     detail = "unknown firmware format version or header size";
     return FoeError::FileHeaderDoesNotExist;
   }
   FirmwareInfo in;
-  in.vendor_id = coe::get_le32(h + 16);
-  in.product_code = coe::get_le32(h + 20);
-  in.revision = coe::get_le32(h + 24);
+  in.vendor_id = le::get32(h + 16);
+  in.product_code = le::get32(h + 20);
+  in.revision = le::get32(h + 24);
   if (!read_text(h + kSoftwareVersionAt, kSoftwareVersionField, in.software_version) ||
       in.software_version.size() > kFirmwareSoftwareVersionMax ||
       !read_text(h + kShortVersionAt, kFirmwareShortVersionMax, in.short_version)) {
@@ -130,14 +130,14 @@ foe::FoeError verify_firmware(std::span<const uint8_t> file, uint32_t vendor_id,
              "/" + std::to_string(product_code);
     return FoeError::FirmwareDoesNotFitHardware;
   }
-  const uint32_t length = coe::get_le32(h + 28);
+  const uint32_t length = le::get32(h + 28);
   const auto payload = file.subspan(kFirmwareHeaderSize);
   if (payload.size() != length) {
     detail = "payload is " + std::to_string(payload.size()) + " bytes, the header says " +
              std::to_string(length);
     return FoeError::WrongChecksum;
   }
-  if (crc32_of(payload) != coe::get_le32(h + 32)) {
+  if (crc32_of(payload) != le::get32(h + 32)) {
     detail = "payload CRC-32 mismatch";
     return FoeError::WrongChecksum;
   }

@@ -30,7 +30,7 @@ Object command(uint16_t index, const char* name, uint16_t command_bytes,
   o.add(octets(3, "Response", response_bytes, acc("ro")));
   o.finalize();
   o.hooks.validate_write = [check](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                   coe::EsmState) {
+                                   EsmState) {
     const auto cmd = written_bytes(obj, 1, subindex, data);
     if (cmd.empty()) return AbortCode::None;
     if (subindex == -1 && std::equal(cmd.begin(), cmd.end(), obj.bytes(1).begin())) {

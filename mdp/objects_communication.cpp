@@ -81,7 +81,7 @@ Object user_pdo(coe::ObjectDictionary& od, bool rx) {
   auto checks = coe::pdo_mapping_validator(od, dir, sm::kMaxProcessDataBytes);
   o.hooks.validate_write = [checks, &od, index, dir](const Object& obj, int subindex,
                                                      std::span<const uint8_t> data,
-                                                     coe::EsmState state) {
+                                                     EsmState state) {
     if (AbortCode rc = checks(obj, subindex, data, state); rc != AbortCode::None) return rc;
     // Only subindex 0 (or a complete write) brings entries into use.
     if (subindex >= 1) return AbortCode::None;
@@ -94,7 +94,7 @@ Object user_pdo(coe::ObjectDictionary& od, bool rx) {
       const coe::Entry* e = obj.entry(i);
       const size_t at = e->bit_offset / 8;
       const uint32_t v = subindex == -1 && at + 4 <= data.size()
-                             ? coe::get_le32(data.data() + at)
+                             ? le::get32(data.data() + at)
                              : static_cast<uint32_t>(obj.get_u(i));
       bits += v & 0xFF;
     }
@@ -127,7 +127,7 @@ Assignment candidate(const Object& obj, int subindex, std::span<const uint8_t> d
   Assignment a;
   a.count = img[0];
   for (uint8_t i = 0; i < a.count && i < kMaxAssignEntries; ++i) {
-    a.pdo[i] = coe::get_le16(&img[2 + 2 * i]);
+    a.pdo[i] = le::get16(&img[2 + 2 * i]);
   }
   return a;
 }
@@ -146,7 +146,7 @@ Object assignment_object(const RackConfig& cfg, coe::ObjectDictionary& od, bool 
   auto checks = coe::pdo_assign_validator(od, rx ? coe::PdoDirection::Rx : coe::PdoDirection::Tx,
                                           sm::kMaxProcessDataBytes);
   o.hooks.validate_write = [checks](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                    coe::EsmState state) {
+                                    EsmState state) {
     if (AbortCode rc = checks(obj, subindex, data, state); rc != AbortCode::None) return rc;
     const Assignment a = candidate(obj, subindex, data);
     for (uint8_t i = 0; i < a.count; ++i) {
@@ -183,10 +183,10 @@ Object sync_parameter_object(bool outputs) {
   o.add(num(0x20, "Sync Error", DataType::Boolean, acc("ro"), 0));
   o.finalize();
   o.hooks.validate_write = [outputs](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                     coe::EsmState) {
+                                     EsmState) {
     const auto v = written_bytes(obj, 0x01, subindex, data);
     if (v.size() < 2) return AbortCode::None;
-    const uint16_t t = coe::get_le16(v.data());
+    const uint16_t t = le::get16(v.data());
     const bool ok = t == kSyncFreeRun || t == kSyncSmEvent || t == kSyncDcSync0 ||
                     (!outputs && t == kSyncWithSm2);
     return ok ? AbortCode::None : AbortCode::ValueRange;

@@ -43,7 +43,7 @@ Object device_information(const RackConfig& cfg) {
   o.add(real(0x0F, "Temperature (CPU Zone)", acc("ro") | kTx, kInitialCpuTemperature));
   o.finalize();
   o.hooks.validate_write = [](const Object& obj, int subindex, std::span<const uint8_t> data,
-                              coe::EsmState) {
+                              EsmState) {
     // Only a changed value is checked: a complete access writes back what it read.
     auto changed = [&](uint8_t sub) {
       auto v = written_bytes(obj, sub, subindex, data);

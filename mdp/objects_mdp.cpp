@@ -42,7 +42,7 @@ bool matches_detected(const coe::ObjectDictionary& od, std::span<const uint8_t> 
   for (uint8_t i = 1; i <= n; ++i) {
     const size_t at = 2 + 4 * (i - 1u);
     if (at + 4 > image.size()) return false;
-    if (coe::get_le32(&image[at]) != detected->get_u(i)) return false;
+    if (le::get32(&image[at]) != detected->get_u(i)) return false;
   }
   return true;
 }
@@ -72,7 +72,7 @@ void add_mdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
   detect.add(num(2, "Status", DataType::Unsigned8, acc("ro"), 0));
   detect.finalize();
   detect.hooks.validate_write = [](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                   coe::EsmState) {
+                                   EsmState) {
     const auto cmd = written_bytes(obj, 1, subindex, data);
     if (cmd.empty()) return AbortCode::None;
     if (subindex == -1 && std::equal(cmd.begin(), cmd.end(), obj.bytes(1).begin())) {
@@ -99,7 +99,7 @@ void add_mdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
       ident_list(cfg, 0xF030, "Configured Module Ident List", 255, acc("ro,wr_preop"));
   const coe::ObjectDictionary* dict = &od;
   configured.hooks.validate_write = [dict](const Object& obj, int subindex,
-                                           std::span<const uint8_t> data, coe::EsmState) {
+                                           std::span<const uint8_t> data, EsmState) {
     std::array<uint8_t, 2 + 4 * 255> cand{};
     const auto cur = obj.image();
     std::memcpy(cand.data(), cur.data(), std::min(cur.size(), cand.size()));

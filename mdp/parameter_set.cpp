@@ -75,7 +75,7 @@ std::vector<uint8_t> ParameterSet::capture() const {
       out.insert(out.end(), b.begin(), b.end());
     } else {
       uint8_t tmp[8];
-      coe::put_le(tmp, 8, r.object->get_u(r.subindex));
+      le::put(tmp, 8, r.object->get_u(r.subindex));
       out.insert(out.end(), tmp, tmp + std::min<size_t>(r.bytes, 8));
       out.resize(out.size() + (r.bytes > 8 ? r.bytes - 8 : 0), 0);
     }
@@ -91,7 +91,7 @@ bool ParameterSet::apply(std::span<const uint8_t> payload) const {
       auto b = r.object->bytes(r.subindex);
       std::copy_n(payload.begin() + static_cast<long>(at), b.size(), b.begin());
     } else {
-      r.object->set_u(r.subindex, coe::get_le(payload.data() + at, std::min<size_t>(r.bytes, 8)));
+      r.object->set_u(r.subindex, le::get(payload.data() + at, std::min<size_t>(r.bytes, 8)));
     }
     at += r.bytes;
   }
@@ -123,8 +123,8 @@ std::string ParameterSet::check(std::span<const uint8_t> payload) const {
       if (r.raw) {
         std::copy_n(payload.begin() + static_cast<long>(end_at), value.size(), value.begin());
       } else {
-        coe::put_le(value.data(), std::min<size_t>(value.size(), 8),
-                    coe::get_le(payload.data() + end_at, std::min<size_t>(r.bytes, 8)));
+        le::put(value.data(), std::min<size_t>(value.size(), 8),
+                    le::get(payload.data() + end_at, std::min<size_t>(r.bytes, 8)));
       }
       coe::copy_bits(candidate.data(), e.bit_offset, value.data(), 0, e.bit_length);
       end_at += r.bytes;
@@ -141,7 +141,7 @@ std::string ParameterSet::check(std::span<const uint8_t> payload) const {
       }
     }
     if (obj.hooks.validate_write) {
-      if (const auto rc = obj.hooks.validate_write(obj, -1, candidate, coe::EsmState::PreOp);
+      if (const auto rc = obj.hooks.validate_write(obj, -1, candidate, EsmState::PreOp);
           rc != coe::AbortCode::None) {
         return fmt::format("0x{:04X} refused as an SDO write would be (abort 0x{:08X})",
                            obj.index(), static_cast<uint32_t>(rc));

@@ -318,15 +318,15 @@ class EniReader {
         fail(c, "InitCmd writes " + what + " but object " + hex16(index) + " of " +
                     dev.description.order_code + " has no subindex " + std::to_string(sub));
       // The state the command is sent in: PREOP for IP and PS, SAFEOP for SO and SP, ...
-      coe::EsmState state = coe::EsmState::PreOp;
+      EsmState state = EsmState::PreOp;
       for (auto t : c.children("Transition")) {
         const std::string_view tr = t.text().get();
         if (tr == "IP" || tr.starts_with("P"))
-          state = coe::EsmState::PreOp;
+          state = EsmState::PreOp;
         else if (tr.starts_with("S"))
-          state = coe::EsmState::SafeOp;
+          state = EsmState::SafeOp;
         else if (tr.starts_with("O"))
-          state = coe::EsmState::Op;
+          state = EsmState::Op;
         if (!coe::access::can_write(e->access, state))
           fail(t, "InitCmd writes " + what + " (" + e->name + ") on transition " + std::string(tr) +
                       " but the ESI makes it not writable then");

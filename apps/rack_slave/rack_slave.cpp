@@ -4,15 +4,11 @@
 #include <utility>
 
 #include "apps/rack_slave/mailbox_events.hpp"
+#include "ecat/slave/mailbox_server.hpp"
 #include "esi/rack.hpp"
 
 namespace rackcat::apps {
 namespace {
-// AL states and CoE ESM states share their encoding (ETG.1000.6 Table 9).
-coe::EsmState esm(ecat::AlState s) {
-  return static_cast<coe::EsmState>(s);
-}
-
 mdp::RackConfig for_position(mdp::RackConfig config, int position) {
   config.control.serial += static_cast<uint32_t>(position);
   return config;
@@ -48,34 +44,49 @@ void RackSlave::device_reset() {
   restart_pending_ = true;
 }
 
-uint16_t RackSlave::on_state_request(ecat::AlState from, ecat::AlState to) {
-  if (const uint16_t code = device_->request_state(esm(from), esm(to))) return code;
-  return rack_->check_state_request(esm(from), esm(to));
+uint16_t RackSlave::on_state_request(EsmState from, EsmState to) {
+  if (const uint16_t code = device_->request_state(from, to)) return code;
+  return rack_->check_state_request(from, to);
 }
 
-void RackSlave::on_state_changed(ecat::AlState from, ecat::AlState to) {
-  device_->state_changed(esm(from), esm(to));
+void RackSlave::on_state_changed(EsmState from, EsmState to) {
+  device_->state_changed(from, to);
 }
 
 ecat::ProcessDataSizes RackSlave::process_data_sizes() const {
   return {device_->output_bytes(), device_->input_bytes()};
 }
 
-size_t RackSlave::on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
-  const size_t n = device_->handle_mailbox(request, reply);
+void RackSlave::add_mailbox_protocols(ecat::MailboxServer& server) {
+  server.add(ecat::mailbox_type::kCoE, coe_mailbox_);
+  server.add(ecat::mailbox_type::kFoE, foe_mailbox_,
+             ecat::MailboxServer::kMailboxStates | ecat::MailboxServer::kBoot);
+}
+
+size_t RackSlave::FoeMailbox::on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                                         EsmState) {
+  const size_t n = slave.device_->handle_mailbox(request, reply);
   log_mailbox_reply(reply.first(n));
   return n;
 }
 
-size_t RackSlave::poll_mailbox(std::span<uint8_t> reply) {
+size_t RackSlave::CoeMailbox::on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                                         EsmState) {
+  const size_t n = slave.device_->handle_mailbox(request, reply);
+  log_mailbox_reply(reply.first(n));
+  return n;
+}
+
+size_t RackSlave::CoeMailbox::poll(std::span<uint8_t> reply) {
+  RackSlave& self = slave;
   // SM1 is free: the master has read the answer to the reset command, so the restart no
   // longer swallows it.
-  if (restart_pending_) {
-    restart_pending_ = false;
-    if (restart_) restart_();
+  if (self.restart_pending_) {
+    self.restart_pending_ = false;
+    if (self.restart_) self.restart_();
     return 0;
   }
-  const size_t n = device_->poll_mailbox(reply);
+  const size_t n = self.device_->poll_mailbox(reply);
   log_mailbox_reply(reply.first(n));
   return n;
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "ecat/application.hpp"
+#include "ecat/slave/mailbox_protocol.hpp"
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"
 #include "mdp/state_directory.hpp"
@@ -33,16 +34,18 @@ class RackSlave final : public ecat::Application {
   mdp::Device& device() { return *device_; }
   // Called (on the ESC's thread) when the device reset command 0xFBF0 has been answered and
   // the master has read the answer: the owner restarts the ESC's application side
-  // (ecat::Esc::application_restart).
+  // (ecat::Firmware::application_restart).
   void set_restart_handler(std::function<void()> fn) { restart_ = std::move(fn); }
   modules::Rack& rack() { return *rack_; }
+  // The mailbox protocols add_mailbox_protocols() registers (unit tests drive them directly).
+  ecat::MailboxProtocol& coe_mailbox() { return coe_mailbox_; }
+  ecat::MailboxProtocol& foe_mailbox() { return foe_mailbox_; }
 
   std::span<const uint8_t> eeprom() const override { return sii_; }
-  uint16_t on_state_request(ecat::AlState from, ecat::AlState to) override;
-  void on_state_changed(ecat::AlState from, ecat::AlState to) override;
+  uint16_t on_state_request(EsmState from, EsmState to) override;
+  void on_state_changed(EsmState from, EsmState to) override;
   ecat::ProcessDataSizes process_data_sizes() const override;
-  size_t on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) override;
-  size_t poll_mailbox(std::span<uint8_t> reply) override;
+  void add_mailbox_protocols(ecat::MailboxServer& server) override;
   void update_inputs(std::span<uint8_t> inputs) override;
   void on_outputs(std::span<const uint8_t> outputs) override;
   void on_sync(int which, uint64_t system_time_ns) override;
@@ -52,6 +55,24 @@ class RackSlave final : public ecat::Application {
   std::unique_ptr<mdp::Device> device_;
   std::unique_ptr<modules::Rack> rack_;  // the slot cards; a CycleListener of device_
   std::vector<uint8_t> sii_;
+
+  // The device's CoE server as the firmware's CoE mailbox protocol (ETG.1000.6 §5.6).
+  struct CoeMailbox final : ecat::MailboxProtocol {
+    explicit CoeMailbox(RackSlave& s) : slave(s) {}
+    size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                      EsmState state) override;
+    size_t poll(std::span<uint8_t> reply) override;
+    RackSlave& slave;
+  };
+  CoeMailbox coe_mailbox_{*this};
+  // The device's FoE server (ETG.1000.5 §5.3) as the firmware's FoE protocol, in BOOT too.
+  struct FoeMailbox final : ecat::MailboxProtocol {
+    explicit FoeMailbox(RackSlave& s) : slave(s) {}
+    size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                      EsmState state) override;
+    RackSlave& slave;
+  };
+  FoeMailbox foe_mailbox_{*this};
   std::function<void()> restart_;
   bool restart_pending_ = false;
 

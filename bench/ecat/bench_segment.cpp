@@ -50,17 +50,24 @@ BENCHMARK(BM_Brd)->Arg(1)->Arg(16)->Unit(benchmark::kNanosecond);
 void BM_MailboxEchoRoundTrip(benchmark::State& state) {
   Line line(1, {}, &SteadyClock::instance());
   line.to_preop();
-  std::vector<uint8_t> request(kMbxSize, 0);
-  request[0] = 10;
-  request[5] = 0x13;
-  FrameBuilder write;
-  write.add(Command::Fpwr, 0x1001, kMbxOutStart, request);
+  // The master counts its requests 1..7 (ETG.1000.4 §5.6): a repeated counter with the same
+  // bytes would be a double write, which the slave drops.
+  std::vector<std::vector<uint8_t>> writes;
+  for (uint8_t c = 1; c <= 7; ++c) {
+    std::vector<uint8_t> request(kMbxSize, 0);
+    request[0] = 10;
+    request[5] = static_cast<uint8_t>(c << 4 | 0x03);
+    FrameBuilder write;
+    write.add(Command::Fpwr, 0x1001, kMbxOutStart, request);
+    writes.push_back(write.build());
+  }
   FrameBuilder read;
   read.add(Command::Fprd, 0x1001, kMbxInStart, std::vector<uint8_t>(kMbxSize, 0));
-  const auto wf = write.build();
   const auto rf = read.build();
-  std::vector<uint8_t> work(std::max(wf.size(), rf.size()));
+  std::vector<uint8_t> work(std::max(writes[0].size(), rf.size()));
+  size_t n = 0;
   for (auto _ : state) {
+    const auto& wf = writes[n++ % writes.size()];
     std::memcpy(work.data(), wf.data(), wf.size());
     line.segment->process(std::span<uint8_t>(work.data(), wf.size()));
     std::memcpy(work.data(), rf.data(), rf.size());

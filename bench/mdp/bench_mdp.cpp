@@ -50,7 +50,7 @@ BENCHMARK(BM_BuildDictionary)->Unit(benchmark::kMillisecond);
 
 void BM_SdoUploadExpedited(benchmark::State& state) {
   mdp::Device device(mdp::default_rack(), options());
-  device.state_changed(coe::EsmState::Init, coe::EsmState::PreOp);
+  device.state_changed(EsmState::Init, EsmState::PreOp);
   // ETG.1000.6 upload initiate of 0x1018:01: mailbox header, CoE header (service 2), SDO.
   std::vector<uint8_t> req = {10, 0, 0, 0, 0, 0x03, 0x00, 0x20, 0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0};
   std::vector<uint8_t> reply(128);

@@ -29,9 +29,9 @@ struct Setup {
     rack.set_source(
         tc, 0, "plant",
         {{"plant", "oven"}, {"a", "-0.1"}, {"b", "5"}, {"c", "1"}, {"inputs", "1.11.0"}});
-    device.state_changed(coe::EsmState::Init, coe::EsmState::PreOp);
-    device.state_changed(coe::EsmState::PreOp, coe::EsmState::SafeOp);
-    device.state_changed(coe::EsmState::SafeOp, coe::EsmState::Op);
+    device.state_changed(EsmState::Init, EsmState::PreOp);
+    device.state_changed(EsmState::PreOp, EsmState::SafeOp);
+    device.state_changed(EsmState::SafeOp, EsmState::Op);
     sm2.assign(device.output_bytes(), 0x55);
     sm3.assign(device.input_bytes(), 0);
   }

@@ -18,6 +18,7 @@
 #include "ecat/application.hpp"
 #include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
+#include "ecat/slave/mailbox_server.hpp"
 #include "esi/describe_dictionary.hpp"
 #include "esi/sii_image.hpp"
 
@@ -75,7 +76,8 @@ coe::ObjectDictionary build_dictionary() {
   return od;
 }
 
-class TinyDevice final : public ecat::Application {
+// The device and its CoE mailbox protocol in one (the firmware dispatches CoE messages here).
+class TinyDevice final : public ecat::Application, public ecat::MailboxProtocol {
  public:
   TinyDevice() : od_(build_dictionary()), sdo_(od_) {
     esi::DeviceTexts texts;
@@ -87,13 +89,17 @@ class TinyDevice final : public ecat::Application {
   }
 
   std::span<const uint8_t> eeprom() const override { return sii_; }
-  uint16_t on_state_request(ecat::AlState, ecat::AlState) override { return 0; }
-  void on_state_changed(ecat::AlState, ecat::AlState to) override { state_ = to; }
+  uint16_t on_state_request(EsmState, EsmState) override { return 0; }
+  void on_state_changed(EsmState, EsmState to) override { state_ = to; }
   ecat::ProcessDataSizes process_data_sizes() const override { return {.outputs = 0, .inputs = 2}; }
-  size_t on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) override {
-    return sdo_.handle(request, reply, static_cast<coe::EsmState>(state_));
+  void add_mailbox_protocols(ecat::MailboxServer& server) override {
+    server.add(ecat::mailbox_type::kCoE, *this);
   }
-  size_t poll_mailbox(std::span<uint8_t> reply) override { return sdo_.poll(reply); }
+  size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                    EsmState state) override {
+    return sdo_.handle(request, reply, state);
+  }
+  size_t poll(std::span<uint8_t> reply) override { return sdo_.poll(reply); }
   void update_inputs(std::span<uint8_t> inputs) override {
     ++counter_;
     od_.find(0x6000)->set_u(0, counter_);
@@ -108,7 +114,7 @@ class TinyDevice final : public ecat::Application {
   coe::ObjectDictionary od_;
   coe::SdoServer sdo_;
   std::vector<uint8_t> sii_;
-  ecat::AlState state_ = ecat::AlState::Init;
+  EsmState state_ = EsmState::Init;
   uint16_t counter_ = 0;
 };
 

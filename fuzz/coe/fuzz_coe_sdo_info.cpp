@@ -14,7 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::vector<uint8_t> reply(16 + data[0] % 120);
   const size_t body = size - 1;
   std::vector<uint8_t> request(8 + body);
-  put_le16(request.data(), static_cast<uint16_t>(2 + body));
+  le::put16(request.data(), static_cast<uint16_t>(2 + body));
   request[5] = 0x03;  // CoE, counter 0
   request[7] = 0x80;  // SDO Information
   std::copy(data + 1, data + size, request.begin() + 8);
@@ -24,7 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   int expected_left = -1;
   while (n) {
     if ((reply[5] & 0x0F) != 0x03 || (reply[7] >> 4) != 8) break;  // mailbox error / other
-    const uint16_t left = get_le16(&reply[10]);
+    const uint16_t left = le::get16(&reply[10]);
     const bool incomplete = (reply[8] & 0x80) != 0;
     if (expected_left >= 0 && left != expected_left) std::abort();
     if (incomplete != (left != 0)) std::abort();

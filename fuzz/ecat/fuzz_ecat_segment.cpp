@@ -16,22 +16,26 @@ namespace {
 using namespace rackcat::ecat;
 
 // A device that accepts everything and records nothing (state persists for millions of runs).
-class FuzzDevice final : public Application {
+class FuzzDevice final : public Application, public MailboxProtocol {
  public:
   std::span<const uint8_t> eeprom() const override { return sii_; }
-  uint16_t on_state_request(AlState, AlState to) override {
-    return to == AlState::Op && (++n_ % 7 == 0) ? 0x001A : 0;
+  uint16_t on_state_request(EsmState, EsmState to) override {
+    return to == EsmState::Op && (++n_ % 7 == 0) ? 0x001A : 0;
   }
-  void on_state_changed(AlState, AlState) override {}
+  void on_state_changed(EsmState, EsmState) override {}
   ProcessDataSizes process_data_sizes() const override {
     return {test::kOutputBytes, test::kInputBytes};
   }
-  size_t on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) override {
+  void add_mailbox_protocols(MailboxServer& server) override {
+    server.add(mailbox_type::kCoE, *this);
+  }
+  size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                    EsmState) override {
     const size_t n = std::min(request.size(), reply.size());
     std::copy_n(request.begin(), n, reply.begin());
     return n;
   }
-  size_t poll_mailbox(std::span<uint8_t> reply) override {
+  size_t poll(std::span<uint8_t> reply) override {
     if (++n_ % 13 != 0 || reply.size() < 8) return 0;
     std::fill_n(reply.begin(), 8, uint8_t{0x5A});
     return 8;

@@ -22,7 +22,7 @@
 
 namespace {
 
-using rackcat::coe::EsmState;
+using rackcat::EsmState;
 
 struct Harness {
   double clock = 0.0;

@@ -15,7 +15,7 @@ inline CanFrame emcy_frame(uint8_t node, const coe::Emergency& e) {
   CanFrame f;
   f.id = cob::kEmcy + node;
   f.len = 8;
-  coe::put_le16(f.data.data(), e.error_code);
+  le::put16(f.data.data(), e.error_code);
   f.data[2] = e.error_register;
   for (size_t i = 0; i < e.data.size(); ++i) {
     f.data[3 + i] = e.data[i];
@@ -30,7 +30,7 @@ inline std::optional<coe::Emergency> decode_emcy(const CanFrame& f) {
     return std::nullopt;
   }
   coe::Emergency e;
-  e.error_code = coe::get_le16(f.data.data());
+  e.error_code = le::get16(f.data.data());
   e.error_register = f.data[2];
   for (size_t i = 0; i < e.data.size(); ++i) {
     e.data[i] = f.data[3 + i];

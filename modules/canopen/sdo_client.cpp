@@ -19,16 +19,16 @@ CanFrame SdoClient::start_upload(uint16_t index, uint8_t subindex, Micros now) {
   deadline_ = now + timeout_;
   // Initiate upload request (CiA 301 §7.2.4.3.6): ccs = 2, index, subindex, 4 reserved.
   std::array<uint8_t, 8> b{static_cast<uint8_t>(sdo::kCcsUploadInitiate << 5)};
-  coe::put_le16(&b[1], index);
+  le::put16(&b[1], index);
   b[3] = subindex;
   return CanFrame::make(cob::kSdoRx + node_, b);
 }
 
 CanFrame SdoClient::make_abort(coe::AbortCode code) {
   std::array<uint8_t, 8> b{sdo::kAbortCommand};
-  coe::put_le16(&b[1], index_);
+  le::put16(&b[1], index_);
   b[3] = subindex_;
-  coe::put_le32(&b[4], static_cast<uint32_t>(code));
+  le::put32(&b[4], static_cast<uint32_t>(code));
   return CanFrame::make(cob::kSdoRx + node_, b);
 }
 
@@ -46,12 +46,12 @@ bool SdoClient::on_frame(const CanFrame& f, Micros now, CanFrame& next, bool& ha
   const uint8_t cmd = f.data[0];
   if (cmd == sdo::kAbortCommand) {
     status_ = Status::Aborted;
-    abort_code_ = static_cast<coe::AbortCode>(coe::get_le32(&f.data[4]));
+    abort_code_ = static_cast<coe::AbortCode>(le::get32(&f.data[4]));
     return true;
   }
   deadline_ = now + timeout_;
   if (!segmented_) {
-    if (sdo::specifier(cmd) != sdo::kScsUploadInitiate || coe::get_le16(&f.data[1]) != index_ ||
+    if (sdo::specifier(cmd) != sdo::kScsUploadInitiate || le::get16(&f.data[1]) != index_ ||
         f.data[3] != subindex_) {
       fail(coe::AbortCode::CommandSpecifier);
       next = make_abort(abort_code_);
@@ -65,7 +65,7 @@ bool SdoClient::on_frame(const CanFrame& f, Micros now, CanFrame& next, bool& ha
       status_ = Status::Done;
       return true;
     }
-    expected_ = (cmd & sdo::kSizeIndicated) ? coe::get_le32(&f.data[4]) : 0;
+    expected_ = (cmd & sdo::kSizeIndicated) ? le::get32(&f.data[4]) : 0;
     if (expected_ > max_size_) {
       fail(coe::AbortCode::OutOfMemory);
       next = make_abort(abort_code_);

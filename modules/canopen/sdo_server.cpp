@@ -12,7 +12,7 @@ namespace {
 constexpr size_t kBody = coe::MailboxHeader::kSize + coe::CoeHeader::kSize;
 }
 
-bool CanSdoServer::handle(const CanFrame& request, coe::EsmState state, CanFrame& response,
+bool CanSdoServer::handle(const CanFrame& request, EsmState state, CanFrame& response,
                           bool& has_response) {
   has_response = false;
   if (request.id != cob::kSdoRx + node_) {
@@ -25,7 +25,7 @@ bool CanSdoServer::handle(const CanFrame& request, coe::EsmState state, CanFrame
     // CiA 301 §7.2.4.3: SDO frames always carry 8 bytes. Anything else is no valid command.
     const uint8_t abort[8] = {coe::sdo::kAbortCommand, 0, 0, 0, 0, 0, 0, 0};
     response = CanFrame::make(cob::kSdoTx + node_, abort);
-    coe::put_le32(response.data.data() + 4,
+    le::put32(response.data.data() + 4,
                   static_cast<uint32_t>(coe::AbortCode::CommandSpecifier));
     has_response = true;
     return true;
@@ -49,7 +49,7 @@ bool CanSdoServer::handle(const CanFrame& request, coe::EsmState state, CanFrame
     // A mailbox-level error has no CAN equivalent: abort the addressed object.
     std::array<uint8_t, 8> abort{coe::sdo::kAbortCommand, request.data[1], request.data[2],
                                  request.data[3]};
-    coe::put_le32(abort.data() + 4, static_cast<uint32_t>(coe::AbortCode::GeneralError));
+    le::put32(abort.data() + 4, static_cast<uint32_t>(coe::AbortCode::GeneralError));
     response = CanFrame::make(cob::kSdoTx + node_, abort);
   } else {
     std::copy_n(reply_.begin() + kBody, 8, response.data.begin());

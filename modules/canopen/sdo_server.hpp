@@ -24,7 +24,7 @@ class CanSdoServer {
   // True when `request` is an SDO request for this node; `response` is then set when the
   // server answers (an abort from the client gets no answer, CiA 301 §7.2.4.3.17).
   // `state` sets the access rights: PRE-OPERATIONAL -> PreOp, OPERATIONAL -> Op.
-  bool handle(const CanFrame& request, coe::EsmState state, CanFrame& response, bool& has_response);
+  bool handle(const CanFrame& request, EsmState state, CanFrame& response, bool& has_response);
   uint8_t node_id() const { return node_; }
 
  private:

@@ -26,17 +26,17 @@ struct BadRequest : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-const char* esm_name(coe::EsmState s) {
+const char* esm_name(EsmState s) {
   switch (s) {
-    case coe::EsmState::Init:
+    case EsmState::Init:
       return "INIT";
-    case coe::EsmState::PreOp:
+    case EsmState::PreOp:
       return "PREOP";
-    case coe::EsmState::Boot:
+    case EsmState::Boot:
       return "BOOT";
-    case coe::EsmState::SafeOp:
+    case EsmState::SafeOp:
       return "SAFEOP";
-    case coe::EsmState::Op:
+    case EsmState::Op:
       return "OP";
   }
   return "?";

@@ -210,7 +210,7 @@ void Rack::start_uart_ptys() {
 void Rack::on_outputs(mdp::Device&) {
   // Outputs are driven only in OP; the first OP data after start (or after leaving OP) is the
   // first valid output data (power-on rule).
-  if (state_ != coe::EsmState::Op) return;
+  if (state_ != EsmState::Op) return;
   for (size_t i = 0; i < drivers_.size(); ++i) {
     if (rim_online(module_rim_[i])) drivers_[i]->read_outputs();
   }
@@ -279,9 +279,9 @@ void Rack::evaluate_faults() {
   }
 }
 
-void Rack::on_state_changed(mdp::Device&, coe::EsmState from, coe::EsmState to) {
+void Rack::on_state_changed(mdp::Device&, EsmState from, EsmState to) {
   state_ = to;
-  if (from == coe::EsmState::Op && to != coe::EsmState::Op) {
+  if (from == EsmState::Op && to != EsmState::Op) {
     apply_safe_states();
     outputs_valid_ = false;
   }
@@ -295,7 +295,7 @@ void Rack::apply_safe_states() {
 }
 
 void Rack::on_watchdog_expired(mdp::Device&) {
-  if (state_ == coe::EsmState::Op) apply_safe_states();
+  if (state_ == EsmState::Op) apply_safe_states();
   outputs_valid_ = false;
   device_.raise_emergency(emcy::kPdTimeout, emcy::kRegGeneric | emcy::kRegCommunication, {});
 }
@@ -343,8 +343,8 @@ void Rack::on_parameters_loaded(mdp::Device&) {
 
 // ---- state and fault injection ------------------------------------------------------------
 
-uint16_t Rack::check_state_request(coe::EsmState from, coe::EsmState to) const {
-  if (to != coe::EsmState::Op || from == coe::EsmState::Op) return 0;
+uint16_t Rack::check_state_request(EsmState from, EsmState to) const {
+  if (to != EsmState::Op || from == EsmState::Op) return 0;
   if (detect_modules_override()) return 0;
   for (const auto& [rr, rim] : rims_) {
     if (rim.state != RimState::Online && rim_has_mapped_process_data(rr))
@@ -415,16 +415,16 @@ void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
       d.de_energise();
       d.clear_inputs();
       d.substitute_inputs(true);
-    } else if (prev != RimState::Online && state_ == coe::EsmState::Op && outputs_valid_) {
+    } else if (prev != RimState::Online && state_ == EsmState::Op && outputs_valid_) {
       d.read_outputs();
     }
   }
   tree_.update();
   dirty_ = false;
-  if (prev == RimState::Online && state != RimState::Online && state_ == coe::EsmState::Op &&
+  if (prev == RimState::Online && state != RimState::Online && state_ == EsmState::Op &&
       !detect_modules_override() && rim_has_mapped_process_data(rr) && state_request_) {
     // Guide Table 23, Detect Modules Override 0: OP -> SAFEOP, outputs to their safe states.
-    state_request_(coe::EsmState::SafeOp, kAlStatusModuleMissing);
+    state_request_(EsmState::SafeOp, kAlStatusModuleMissing);
   }
 }
 
@@ -697,7 +697,7 @@ void Rack::update_inputs(size_t i, double t, double dt) {
 }
 
 void Rack::refresh() {
-  if (state_ != coe::EsmState::SafeOp && state_ != coe::EsmState::Op) {
+  if (state_ != EsmState::SafeOp && state_ != EsmState::Op) {
     // No process data runs: sample the inputs here so SDO reads and `ctl list` are live.
     const double t = now();
     for (size_t i = 0; i < drivers_.size(); ++i) update_inputs(i, t - t0_, options_.cycle_time_s);

@@ -7,8 +7,8 @@
 //
 //   mdp::Device device(config);
 //   modules::Rack rack(device);                         // attaches itself as CycleListener
-//   rack.set_state_request_handler([&](coe::EsmState to, uint16_t al_status) {
-//     esc_loop.post([&, to, al_status] { esc.application_error(to, al_status); });
+//   rack.set_state_request_handler([&](EsmState to, uint16_t al_status) {
+//     esc_loop.post([&, to, al_status] { firmware.application_error(to, al_status); });
 //   });
 //   // In ecat::Application::on_state_request(from, to), after device.request_state():
 //   //   if (uint16_t code = rack.check_state_request(from, to)) return code;
@@ -61,7 +61,7 @@ struct RackOptions {
 
 using PostFn = std::function<void(std::function<void()>)>;
 // Requested ESM change (e.g. OP -> SAFEOP with AL status 0x0070 and the error flag).
-using StateRequestFn = std::function<void(coe::EsmState to, uint16_t al_status_code)>;
+using StateRequestFn = std::function<void(EsmState to, uint16_t al_status_code)>;
 
 struct RimStatus {
   uint8_t number = 0;
@@ -88,7 +88,7 @@ class Rack : public mdp::CycleListener {
   void set_state_request_handler(StateRequestFn fn) { state_request_ = std::move(fn); }
   // Veto for AL state requests the device accepted: with Detect Modules Override 0 a RIM
   // with mapped process data must be online for SAFEOP -> OP (guide §4.4). 0 = accept.
-  uint16_t check_state_request(coe::EsmState from, coe::EsmState to) const;
+  uint16_t check_state_request(EsmState from, EsmState to) const;
 
   // Pseudo-terminals of the UART channels (logged: "UART module 19 channel 0: /dev/pts/4").
   void start_uart_ptys();
@@ -100,7 +100,7 @@ class Rack : public mdp::CycleListener {
   // device thread, in every ESM state): the 30 s CPU temperature reading (guide §4.8) and any
   // pending exception-tree update.
   void on_clock();
-  void on_state_changed(mdp::Device&, coe::EsmState from, coe::EsmState to) override;
+  void on_state_changed(mdp::Device&, EsmState from, EsmState to) override;
   void on_watchdog_expired(mdp::Device&) override;
   void on_exception_reset(mdp::Device&) override;
   void on_detect_modules(mdp::Device&) override;
@@ -109,7 +109,7 @@ class Rack : public mdp::CycleListener {
 
   // --- State and fault injection (device thread).
   mdp::Device& device() { return device_; }
-  coe::EsmState esm_state() const { return state_; }
+  EsmState esm_state() const { return state_; }
   bool outputs_valid() const { return outputs_valid_; }
   double now() const;
   std::span<const std::unique_ptr<CardDriver>> drivers() const { return drivers_; }
@@ -179,7 +179,7 @@ class Rack : public mdp::CycleListener {
   std::unique_ptr<ChannelDiagnostics> channel_diag_;  // after drivers_ exist
   StateRequestFn state_request_;
 
-  coe::EsmState state_ = coe::EsmState::Init;
+  EsmState state_ = EsmState::Init;
   bool outputs_valid_ = false;
   double t0_ = 0.0;
   double last_t_ = 0.0;

@@ -205,7 +205,7 @@ void RimMaster::check_done(Link& l, Micros now) {
   if (c.index == 0x1018) {
     const uint32_t want =
         c.subindex == 1 ? l.profile.identity.vendor_id : l.profile.identity.product_code;
-    const uint32_t have = got.size() == 4 ? coe::get_le32(got.data()) : ~want;
+    const uint32_t have = got.size() == 4 ? le::get32(got.data()) : ~want;
     ok = have == want;
     expected = fmt::format("0x{:08x}", want);
     actual = got.size() == 4 ? fmt::format("0x{:08x}", have) : "a value of wrong size";

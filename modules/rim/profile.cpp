@@ -103,7 +103,7 @@ void add_var(coe::ObjectDictionary& od, uint16_t index, const char* name, coe::D
 
 std::vector<uint8_t> le32(uint32_t v) {
   std::vector<uint8_t> b(4);
-  coe::put_le32(b.data(), v);
+  le::put32(b.data(), v);
   return b;
 }
 
@@ -228,8 +228,8 @@ RimProfile rim_profile(const mdp::RackConfig& rack, uint8_t rim) {
     }
     const size_t at = p.card_list.size();
     p.card_list.resize(at + 4);
-    coe::put_le16(&p.card_list[at], s.slot);
-    coe::put_le16(&p.card_list[at + 2], card.card_id);
+    le::put16(&p.card_list[at], s.slot);
+    le::put16(&p.card_list[at + 2], card.card_id);
   }
   lay_out(p.inputs, p.di_bytes, p.ai_words, p.tx_bytes);
   lay_out(p.outputs, p.do_bytes, p.ao_words, p.rx_bytes);
@@ -300,7 +300,7 @@ void put_channel(std::span<uint8_t> stream, const RimChannel& c, double value) {
     stream[c.offset] =
         static_cast<uint8_t>(raw ? (stream[c.offset] | mask) : (stream[c.offset] & ~mask));
   } else {
-    coe::put_le16(&stream[c.offset], raw);
+    le::put16(&stream[c.offset], raw);
   }
 }
 
@@ -308,7 +308,7 @@ double get_channel(std::span<const uint8_t> stream, const RimChannel& c) {
   if (c.kind == ChannelKind::DigitalIn || c.kind == ChannelKind::DigitalOut) {
     return decode_channel(c, (stream[c.offset] >> c.bit) & 1);
   }
-  return decode_channel(c, coe::get_le16(&stream[c.offset]));
+  return decode_channel(c, le::get16(&stream[c.offset]));
 }
 
 coe::ObjectDictionary rim_dictionary(const RimProfile& p, uint16_t heartbeat_ms,
@@ -346,7 +346,7 @@ coe::ObjectDictionary rim_dictionary(const RimProfile& p, uint16_t heartbeat_ms,
     od.add(std::move(obj));
   }
   std::vector<uint8_t> hb(2);
-  coe::put_le16(hb.data(), heartbeat_ms);
+  le::put16(hb.data(), heartbeat_ms);
   add_var(od, 0x1017, "Producer heartbeat time", DataType::Unsigned16, 16, access::kRw, hb);
 
   coe::Object id(0x1018, coe::ObjectCode::Record, "Identity object", 0x0023);
@@ -399,7 +399,7 @@ void stream_to_objects(coe::ObjectDictionary& od, const RimProfile& p, bool tran
   if (coe::Object* o = words ? od.find(transmit ? 0x6401 : 0x6411) : nullptr) {
     const size_t base = (bytes + 1) & ~size_t{1};
     for (size_t i = 0; i < words; ++i) {
-      o->set_u(static_cast<uint8_t>(i + 1), coe::get_le16(&stream[base + 2 * i]));
+      o->set_u(static_cast<uint8_t>(i + 1), le::get16(&stream[base + 2 * i]));
     }
   }
 }

@@ -39,7 +39,7 @@ void attach_rim_master(RimMaster& master, Rack& rack) {
     if (e.error_code == emcy::kFan) {
       const char* zone = e.data[0] == 0 ? "power_supply" : "slot_card";
       try {
-        rack.set_fan_rpm(rim, zone, coe::get_le16(&e.data[1]));
+        rack.set_fan_rpm(rim, zone, le::get16(&e.data[1]));
       } catch (const std::invalid_argument&) {
         // The rack file says this RIM has no such fan: nothing to show.
       }

@@ -67,7 +67,7 @@ ThreadedRimLink::ThreadedRimLink(Rack& rack, std::unique_ptr<CanBus> bus, RimMas
   master_->on_emergency([this](uint8_t rim, const coe::Emergency& e) {
     if (e.error_code != emcy::kFan) return;
     const char* zone = e.data[0] == 0 ? "power_supply" : "slot_card";
-    const double rpm = coe::get_le16(&e.data[1]);
+    const double rpm = le::get16(&e.data[1]);
     post_([this, rim, zone, rpm] {
       try {
         rack_.set_fan_rpm(rim, zone, rpm);

@@ -22,7 +22,7 @@
 namespace rackcat::apps {
 namespace {
 
-using ecat::AlState;
+using rackcat::EsmState;
 
 // Default rack: RIM 1 slots 1..19 = modules 1..19, RIM 2 slots 1..8 = modules 20..27.
 constexpr size_t kRim1Modules = 19, kAllModules = 27;
@@ -40,8 +40,8 @@ class DetectModules : public ::testing::Test {
     std::filesystem::create_directories(dir);
     slave = std::make_unique<RackSlave>(*load_rack_or_report(""), dir.string(), 0);
     slave->set_restart_handler([this] { ++restarts; });
-    ASSERT_EQ(slave->on_state_request(AlState::Init, AlState::PreOp), 0);
-    slave->on_state_changed(AlState::Init, AlState::PreOp);
+    ASSERT_EQ(slave->on_state_request(EsmState::Init, EsmState::PreOp), 0);
+    slave->on_state_changed(EsmState::Init, EsmState::PreOp);
     sdo = std::make_unique<mdp::testing::SdoClient>(slave->device());
   }
   void TearDown() override {
@@ -83,7 +83,7 @@ class DetectModules : public ::testing::Test {
       for (uint64_t m : assigned_modules(rx)) EXPECT_LE(m, modules) << (rx ? "0x1C12" : "0x1C13");
     }
     EXPECT_FALSE(assigned_modules(false).empty());
-    EXPECT_EQ(slave->on_state_request(AlState::PreOp, AlState::SafeOp), 0);
+    EXPECT_EQ(slave->on_state_request(EsmState::PreOp, EsmState::SafeOp), 0);
   }
 
   std::filesystem::path dir;
@@ -127,10 +127,10 @@ TEST_F(DetectModules, AConfiguredListThatDiffersIsRefusedWith0x0070) {
   for (uint8_t s = 1; s <= kAllModules; ++s) {
     configured.set_u(s, slave->device().modules()[s - 1].card->module_ident);
   }
-  EXPECT_EQ(slave->on_state_request(AlState::PreOp, AlState::SafeOp), 0x0070);
+  EXPECT_EQ(slave->on_state_request(EsmState::PreOp, EsmState::SafeOp), 0x0070);
   // sub 0 = 0 switches the check off (ETG.5001.1).
   ASSERT_EQ(sdo->write_u(0xF030, 0, 0, 1), 0u);
-  EXPECT_EQ(slave->on_state_request(AlState::PreOp, AlState::SafeOp), 0);
+  EXPECT_EQ(slave->on_state_request(EsmState::PreOp, EsmState::SafeOp), 0);
 }
 
 TEST_F(DetectModules, DeviceResetWithARimOfflineEnumeratesWhatIsDetected) {
@@ -142,7 +142,7 @@ TEST_F(DetectModules, DeviceResetWithARimOfflineEnumeratesWhatIsDetected) {
   std::array<uint8_t, 128> reply{};
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   while (restarts == 0 && std::chrono::steady_clock::now() < deadline) {
-    slave->poll_mailbox(reply);
+    slave->coe_mailbox().poll(reply);
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   ASSERT_EQ(restarts, 1);

@@ -23,7 +23,7 @@
 namespace rackcat::apps {
 namespace {
 
-using ecat::AlState;
+using rackcat::EsmState;
 
 class RackSlaveTest : public ::testing::Test {
  protected:
@@ -45,8 +45,8 @@ class RackSlaveTest : public ::testing::Test {
 
 // INIT -> PREOP as the ESC does it: ask, then report the change. SDO needs PREOP.
 void to_preop(RackSlave& slave) {
-  ASSERT_EQ(slave.on_state_request(AlState::Init, AlState::PreOp), 0);
-  slave.on_state_changed(AlState::Init, AlState::PreOp);
+  ASSERT_EQ(slave.on_state_request(EsmState::Init, EsmState::PreOp), 0);
+  slave.on_state_changed(EsmState::Init, EsmState::PreOp);
 }
 
 uint32_t sii_u32(std::span<const uint8_t> sii,
@@ -96,7 +96,7 @@ TEST_F(RackSlaveTest, MailboxRequestsReachTheDevicesSdoServer) {
   const std::array<uint8_t, 16> request{10,   0,    0,    0,    0, 0x13, 0x00, 0x20,
                                         0x40, 0x18, 0x10, 0x02, 0, 0,    0,    0};
   std::array<uint8_t, 128> reply{};
-  const size_t n = slave.on_mailbox(request, reply);
+  const size_t n = slave.coe_mailbox().on_request(request, reply, EsmState::PreOp);
   ASSERT_GE(n, 16u);
   EXPECT_EQ(reply[5] & 0x0F, 0x03);                             // CoE
   EXPECT_EQ(reply[7] >> 4, 0x3);                                // SDO response
@@ -107,9 +107,9 @@ TEST_F(RackSlaveTest, MailboxRequestsReachTheDevicesSdoServer) {
 TEST_F(RackSlaveTest, StateChangesReachTheDevice) {
   RackSlave slave(default_rack(), dir_.string(), 0);
   to_preop(slave);
-  EXPECT_EQ(slave.device().state(), coe::EsmState::PreOp);
-  slave.on_state_changed(AlState::PreOp, AlState::Init);
-  EXPECT_EQ(slave.device().state(), coe::EsmState::Init);
+  EXPECT_EQ(slave.device().state(), EsmState::PreOp);
+  slave.on_state_changed(EsmState::PreOp, EsmState::Init);
+  EXPECT_EQ(slave.device().state(), EsmState::Init);
 }
 
 TEST_F(RackSlaveTest, DeviceResetRestartsTheEscOnceTheAnswerIsRead) {
@@ -127,11 +127,11 @@ TEST_F(RackSlaveTest, DeviceResetRestartsTheEscOnceTheAnswerIsRead) {
   std::array<uint8_t, 128> reply{};
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
   while (restarts == 0 && std::chrono::steady_clock::now() < deadline) {
-    slave.poll_mailbox(reply);
+    slave.coe_mailbox().poll(reply);
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   EXPECT_EQ(restarts, 1);
-  slave.poll_mailbox(reply);
+  slave.coe_mailbox().poll(reply);
   EXPECT_EQ(restarts, 1);  // once per reset
 }
 

@@ -1,5 +1,7 @@
 #include "tests/ecat/test_application.hpp"
 
+#include "ecat/slave/mailbox_server.hpp"
+
 #include <algorithm>
 #include <string_view>
 
@@ -96,15 +98,20 @@ void TestApplication::on_eeprom_write(uint16_t word_address, std::span<const uin
   eeprom_writes.emplace_back(word_address, static_cast<uint16_t>(data[0] | data[1] << 8));
 }
 
-uint16_t TestApplication::on_state_request(AlState, AlState to) {
+uint16_t TestApplication::on_state_request(EsmState, EsmState to) {
   return (veto_code != 0 && to == veto_to) ? veto_code : 0;
 }
 
-void TestApplication::on_state_changed(AlState from, AlState to) {
+void TestApplication::on_state_changed(EsmState from, EsmState to) {
   transitions.emplace_back(from, to);
 }
 
-size_t TestApplication::on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
+void TestApplication::add_mailbox_protocols(MailboxServer& server) {
+  server.add(mailbox_type::kCoE, *this);
+}
+
+size_t TestApplication::on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                                   EsmState) {
   ++mailbox_requests;
   last_request.assign(request.begin(), request.end());
   // Echo: the mailbox header (6 bytes) says how long the message is (ETG.1000.4 §5.5).
@@ -114,7 +121,7 @@ size_t TestApplication::on_mailbox(std::span<const uint8_t> request, std::span<u
   return n;
 }
 
-size_t TestApplication::poll_mailbox(std::span<uint8_t> reply) {
+size_t TestApplication::poll(std::span<uint8_t> reply) {
   if (pending_emergency.empty() || pending_emergency.size() > reply.size()) return 0;
   std::copy(pending_emergency.begin(), pending_emergency.end(), reply.begin());
   const size_t n = pending_emergency.size();

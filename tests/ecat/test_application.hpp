@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "ecat/application.hpp"
+#include "ecat/slave/mailbox_protocol.hpp"
 
 namespace rackcat::ecat::test {
 
@@ -26,17 +27,20 @@ inline constexpr uint16_t kInputBytes = 6;
 // The SII image: words 0-0x3F header, categories from word 0x40.
 std::vector<uint8_t> make_test_sii();
 
-class TestApplication : public Application {
+// The device is its own mailbox protocol (registered for CoE): it echoes every request.
+class TestApplication : public Application, public MailboxProtocol {
  public:
   TestApplication();
 
   std::span<const uint8_t> eeprom() const override { return sii; }
   void on_eeprom_write(uint16_t word_address, std::span<const uint8_t> data) override;
-  uint16_t on_state_request(AlState from, AlState to) override;
-  void on_state_changed(AlState from, AlState to) override;
+  uint16_t on_state_request(EsmState from, EsmState to) override;
+  void on_state_changed(EsmState from, EsmState to) override;
   ProcessDataSizes process_data_sizes() const override { return sizes; }
-  size_t on_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) override;
-  size_t poll_mailbox(std::span<uint8_t> reply) override;
+  void add_mailbox_protocols(MailboxServer& server) override;
+  size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                    EsmState state) override;
+  size_t poll(std::span<uint8_t> reply) override;
   void update_inputs(std::span<uint8_t> inputs) override;
   void on_outputs(std::span<const uint8_t> outputs) override;
   void on_sync(int which, uint64_t system_time_ns) override;
@@ -45,15 +49,15 @@ class TestApplication : public Application {
   std::vector<uint8_t> sii;
   ProcessDataSizes sizes{kOutputBytes, kInputBytes};
   uint16_t veto_code = 0;           // returned by on_state_request when non-zero
-  AlState veto_to = AlState::Init;  // ... for requests to this state
+  EsmState veto_to = EsmState::Init;  // ... for requests to this state
   std::vector<uint8_t> inputs_value = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66};
   std::vector<uint8_t> last_outputs;
   int outputs_count = 0;
   int inputs_count = 0;
   int mailbox_requests = 0;
   std::vector<uint8_t> last_request;
-  std::vector<uint8_t> pending_emergency;  // sent by poll_mailbox once
-  std::vector<std::pair<AlState, AlState>> transitions;
+  std::vector<uint8_t> pending_emergency;  // sent by poll() once
+  std::vector<std::pair<EsmState, EsmState>> transitions;
   std::vector<std::pair<int, uint64_t>> syncs;
   int watchdog_expiries = 0;
   std::vector<std::pair<uint16_t, uint16_t>> eeprom_writes;  // word address, value

@@ -27,10 +27,10 @@ TEST_F(EsmTest, FullPathUpAndDown) {
   EXPECT_EQ(request(0x04), 0x0004);
   EXPECT_EQ(request(0x02), 0x0002);
   EXPECT_EQ(request(0x01), 0x0001);
-  const std::vector<std::pair<AlState, AlState>> expected = {
-      {AlState::Init, AlState::PreOp},   {AlState::PreOp, AlState::SafeOp},
-      {AlState::SafeOp, AlState::Op},    {AlState::Op, AlState::SafeOp},
-      {AlState::SafeOp, AlState::PreOp}, {AlState::PreOp, AlState::Init}};
+  const std::vector<std::pair<EsmState, EsmState>> expected = {
+      {EsmState::Init, EsmState::PreOp},   {EsmState::PreOp, EsmState::SafeOp},
+      {EsmState::SafeOp, EsmState::Op},    {EsmState::Op, EsmState::SafeOp},
+      {EsmState::SafeOp, EsmState::PreOp}, {EsmState::PreOp, EsmState::Init}};
   EXPECT_EQ(line.app(0).transitions, expected);
 }
 
@@ -179,17 +179,17 @@ TEST_F(EsmTest, DeviceWithoutOutputsRefusesEnabledSm2) {
 
 TEST_F(EsmTest, SmWatchdog0x001BFallsToSafeop) {
   line.to_op();
-  ASSERT_EQ(line.esc(0).al_state(), AlState::Op);
+  ASSERT_EQ(line.fw(0).state(), EsmState::Op);
   // Reset values: (2498 + 2) x 40 ns x 1000 = 100 ms.
   EXPECT_EQ(line.segment->next_event_ns(), line.clock.now_ns() + 100'000'000);
   line.clock.advance(99'000'000);
   line.cycle({1, 2, 3, 4});  // retriggers
   line.clock.advance(99'000'000);
   line.segment->service();
-  EXPECT_EQ(line.esc(0).al_state(), AlState::Op);
+  EXPECT_EQ(line.fw(0).state(), EsmState::Op);
   line.clock.advance(2'000'000);
   line.segment->service();
-  EXPECT_EQ(line.esc(0).al_state(), AlState::SafeOp);
+  EXPECT_EQ(line.fw(0).state(), EsmState::SafeOp);
   EXPECT_EQ(status(), 0x0014);
   EXPECT_EQ(code(), 0x001B);
   EXPECT_EQ(line.app(0).watchdog_expiries, 1);
@@ -207,7 +207,7 @@ TEST_F(EsmTest, WatchdogTimeZeroDisablesIt) {
   request(0x08);
   line.clock.advance(10'000'000'000);
   line.segment->service();
-  EXPECT_EQ(line.esc(0).al_state(), AlState::Op);
+  EXPECT_EQ(line.fw(0).state(), EsmState::Op);
 }
 
 TEST_F(EsmTest, InvalidDcSyncConfiguration0x0030) {
@@ -240,7 +240,7 @@ TEST_F(EsmTest, FatalSyncError0x002CWhenSyncStopsInOp) {
 
 TEST_F(EsmTest, ApplicationVetoSetsItsCode) {
   line.app(0).veto_code = 0x0070;
-  line.app(0).veto_to = AlState::SafeOp;
+  line.app(0).veto_to = EsmState::SafeOp;
   line.to_preop();
   line.master->config_map();
   EXPECT_EQ(request(0x04), 0x0012);
@@ -275,7 +275,7 @@ TEST_F(EsmTest, DisablingOutputsSmInOpFallsToPreop) {
   line.master->fpwr8(kStation, 0x0816, 0x00);  // master switches SM2 off
   EXPECT_EQ(status(), 0x0012);
   EXPECT_EQ(code(), 0x001D);
-  EXPECT_EQ(line.app(0).transitions.back(), std::make_pair(AlState::Op, AlState::PreOp));
+  EXPECT_EQ(line.app(0).transitions.back(), std::make_pair(EsmState::Op, EsmState::PreOp));
 }
 
 TEST_F(EsmTest, MovingMailboxSmInPreopFallsToInit) {
@@ -303,7 +303,7 @@ TEST(Esm, SyncManagerPastTheAddressSpaceIsNotASyncManager) {
   // does not treat it as a SyncManager (no buffer semantics, no device call past memory).
   line.master->fpwr8(0x1001, 0x081E, 0x00);
   line.master->fpwr(0x1001, 0x0818, {0xF0, 0xFF, 0x00, 0x01, 0x20, 0x00, 0x01, 0x00});
-  EXPECT_EQ(line.esc(0).al_state(), AlState::PreOp);
+  EXPECT_EQ(line.fw(0).state(), EsmState::PreOp);
   EXPECT_EQ(line.esc(0).al_status_code(), 0x001E);
   EXPECT_EQ(line.master->fprd(0x1001, 0xFFF0, 16).wkc, 1);
 }
@@ -317,17 +317,17 @@ namespace {
 TEST(Esm, ApplicationErrorFallsOnlyDown) {
   Line line(1);
   line.to_op();
-  line.esc(0).application_error(AlState::SafeOp, 0x0070);
-  EXPECT_EQ(line.esc(0).al_state(), AlState::SafeOp);
+  line.fw(0).application_error(EsmState::SafeOp, 0x0070);
+  EXPECT_EQ(line.fw(0).state(), EsmState::SafeOp);
   EXPECT_EQ(line.master->fprd16(0x1001, 0x0130), 0x0014);
   EXPECT_EQ(line.master->fprd16(0x1001, 0x0134), 0x0070);
   // A "fall" upwards keeps the state; the code is updated.
-  line.esc(0).application_error(AlState::Op, 0x0071);
-  EXPECT_EQ(line.esc(0).al_state(), AlState::SafeOp);
+  line.fw(0).application_error(EsmState::Op, 0x0071);
+  EXPECT_EQ(line.fw(0).state(), EsmState::SafeOp);
   EXPECT_EQ(line.esc(0).al_status_code(), 0x0071);
   // BOOT is not below SAFEOP in the state machine.
-  line.esc(0).application_error(AlState::Boot, 0x0072);
-  EXPECT_EQ(line.esc(0).al_state(), AlState::SafeOp);
+  line.fw(0).application_error(EsmState::Boot, 0x0072);
+  EXPECT_EQ(line.fw(0).state(), EsmState::SafeOp);
   // The master acknowledges and goes on.
   EXPECT_EQ(line.master->request_state(0x1001, 0x14), 0x0004);
 }

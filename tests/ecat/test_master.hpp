@@ -100,6 +100,7 @@ struct Line {
   // `time` replaces the manual clock (benchmarks run on SteadyClock).
   explicit Line(size_t n, SegmentOptions options = {}, const Clock* time = nullptr);
   Esc& esc(size_t i) { return segment->slave(i).esc(); }
+  Firmware& fw(size_t i) { return segment->slave(i).firmware(); }
   TestApplication& app(size_t i) { return *apps.at(i); }
   static uint16_t station(size_t i) { return static_cast<uint16_t>(0x1001 + i); }
   void to_preop() { master->config_init(); }

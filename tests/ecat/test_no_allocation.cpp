@@ -119,5 +119,52 @@ TEST(EventLog, PushAllocatesNothingAndCountsWhatItDrops) {
   }
 }
 
+TEST(NoAllocation, MailboxRoundTripsAndRepeatsAllocateNothing) {
+  // The firmware's mailbox path: SM0 read through the PDI, header checks, double-write check,
+  // dispatch to the protocol, counter, SM1 write, and the repeat request.
+  Line line(1);
+  line.to_preop();
+  const uint16_t s = Line::station(0);
+  std::vector<uint8_t> request(kMbxSize, 0);
+  request[0] = 4;
+  std::vector<uint8_t> reply(kMbxSize, 0);
+  FrameBuilder write;
+  FrameBuilder read;
+  read.add(Command::Fprd, s, kMbxInStart, reply);
+  FrameBuilder repeat_on;
+  repeat_on.add(Command::Fpwr, s, 0x080E, {0x03});
+  FrameBuilder repeat_off;
+  repeat_off.add(Command::Fpwr, s, 0x080E, {0x01});
+  std::vector<std::vector<uint8_t>> writes;
+  for (uint8_t c = 1; c <= 7; ++c) {
+    request[5] = static_cast<uint8_t>(c << 4 | 0x03);
+    FrameBuilder w;
+    w.add(Command::Fpwr, s, kMbxOutStart, request);
+    writes.push_back(w.build());
+  }
+  const auto read_frame = read.build();
+  const auto on = repeat_on.build();
+  const auto off = repeat_off.build();
+  std::vector<uint8_t> work(std::max(writes[0].size(), read_frame.size()));
+  auto run = [&](const std::vector<uint8_t>& f) {
+    std::copy(f.begin(), f.end(), work.begin());
+    line.segment->process(std::span<uint8_t>(work.data(), f.size()));
+  };
+  run(writes[0]);  // warm-up: the test device sizes its copy of the request
+  run(read_frame);
+  if (!rackcat::testing::CountAllocations::available()) GTEST_SKIP() << "operator new is ASan's";
+  std::optional<rackcat::testing::CountAllocations> count(std::in_place);
+  for (int i = 1; i <= 500; ++i) {
+    run(writes[static_cast<size_t>(i % 7)]);
+    run(read_frame);
+    run(i % 2 ? on : off);  // the master lost the reply: asks for it again
+    run(read_frame);
+  }
+  const size_t allocations = count->allocations();
+  count.reset();
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_EQ(line.app(0).mailbox_requests, 501);
+}
+
 }  // namespace
 }  // namespace rackcat::ecat::test

@@ -12,7 +12,7 @@ TEST(Segment, SixteenSlavesCyclicExchange) {
   Line line(16);
   line.to_op();
   for (size_t k = 0; k < 16; ++k) {
-    ASSERT_EQ(line.esc(k).al_state(), AlState::Op) << k;
+    ASSERT_EQ(line.fw(k).state(), EsmState::Op) << k;
     line.app(k).inputs_value = {static_cast<uint8_t>(k),       1, 2, 3, 4,
                                 static_cast<uint8_t>(0xF0 | k)};
   }
@@ -20,6 +20,9 @@ TEST(Segment, SixteenSlavesCyclicExchange) {
   for (size_t k = 0; k < 16; ++k) {
     for (uint8_t b = 0; b < kOutputBytes; ++b) outputs.push_back(static_cast<uint8_t>(k * 16 + b));
   }
+  // The firmware produces inputs after each frame for the next one (as a real slave's µC
+  // does): the new input values appear from the second cycle on.
+  line.cycle(outputs);
   const auto r = line.cycle(outputs);
   // SOEM's expected WKC: 2 x output slaves + input slaves; FRMW: 1 read + 15 writes.
   EXPECT_EQ(r[0].wkc, 16 * 3);

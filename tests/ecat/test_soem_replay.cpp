@@ -24,9 +24,9 @@ TEST(SoemReplay, ConfigInitBringsOneSlaveToPreop) {
   EXPECT_EQ(esc.station_address(), 0x1001);
   EXPECT_EQ(master.fprd16(0x1001, 0x0130), 0x0002);  // PREOP, no error
   EXPECT_EQ(master.fprd16(0x1001, 0x0134), 0x0000);
-  EXPECT_EQ(esc.al_state(), AlState::PreOp);
+  EXPECT_EQ(segment.slave(0).firmware().state(), EsmState::PreOp);
   ASSERT_FALSE(app.transitions.empty());
-  EXPECT_EQ(app.transitions.back(), std::make_pair(AlState::Init, AlState::PreOp));
+  EXPECT_EQ(app.transitions.back(), std::make_pair(EsmState::Init, EsmState::PreOp));
   // Identity from SII as SOEM reads it.
   EXPECT_EQ(master.sii_read_word(0x1001, 0x08) | master.sii_read_word(0x1001, 0x09) << 16,
             kVendorId);
@@ -48,7 +48,7 @@ TEST(SoemReplay, ConfigInitOnSixteenSlaves) {
   master.config_init();
   for (uint16_t k = 0; k < 16; ++k) {
     EXPECT_EQ(segment.slave(k).esc().station_address(), 0x1001 + k);
-    EXPECT_EQ(segment.slave(k).esc().al_state(), AlState::PreOp) << "slave " << k;
+    EXPECT_EQ(segment.slave(k).firmware().state(), EsmState::PreOp) << "slave " << k;
     // In-line slaves have port 1 open as well; the last one only port 0.
     EXPECT_EQ(master.fprd16(static_cast<uint16_t>(0x1001 + k), 0x0110), k == 15 ? 0x5613 : 0x5A33);
   }

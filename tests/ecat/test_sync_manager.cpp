@@ -137,7 +137,7 @@ TEST(BufferedSm, OutputsReachTheDeviceOnlyInOp) {
   EXPECT_EQ(r[0].wkc, 3);                   // outputs written (2) + inputs read (1)
   EXPECT_EQ(line.app(0).outputs_count, 0);  // SAFEOP: outputs stay in their safe state
   line.master->request_state(kStation, 0x08);
-  ASSERT_EQ(line.esc(0).al_state(), AlState::Op);
+  ASSERT_EQ(line.fw(0).state(), EsmState::Op);
   r = line.cycle({0x01, 0x02, 0x03, 0x04});
   EXPECT_EQ(r[0].wkc, 3);
   EXPECT_EQ(line.app(0).last_outputs, (std::vector<uint8_t>{0x01, 0x02, 0x03, 0x04}));
@@ -145,13 +145,16 @@ TEST(BufferedSm, OutputsReachTheDeviceOnlyInOp) {
   EXPECT_EQ(std::vector<uint8_t>(r[0].data.begin() + 4, r[0].data.end()), line.app(0).inputs_value);
 }
 
-TEST(BufferedSm, InputsAreRefreshedForEveryRead) {
+TEST(BufferedSm, InputsAreRefreshedForEveryCycle) {
   Line line(1);
   line.to_op();
   const int before = line.app(0).inputs_count;
   line.app(0).inputs_value = {9, 8, 7, 6, 5, 4};
+  // The firmware writes SM3 after each frame that wrote SM2 / read SM3: the master's next
+  // frame reads it (one frame of latency, as behind a real ESC).
+  line.cycle({0, 0, 0, 0});
   const auto r = line.cycle({0, 0, 0, 0});
-  EXPECT_EQ(line.app(0).inputs_count, before + 1);
+  EXPECT_EQ(line.app(0).inputs_count, before + 2);
   EXPECT_EQ(std::vector<uint8_t>(r[0].data.begin() + 4, r[0].data.end()), line.app(0).inputs_value);
 }
 

@@ -22,12 +22,11 @@ class LoopbackApplication final : public ecat::Application {
   }
 
   std::span<const uint8_t> eeprom() const override { return sii_; }
-  uint16_t on_state_request(ecat::AlState, ecat::AlState) override { return 0; }
-  void on_state_changed(ecat::AlState, ecat::AlState to) override { state_ = to; }
+  uint16_t on_state_request(EsmState, EsmState) override { return 0; }
+  void on_state_changed(EsmState, EsmState to) override { state_ = to; }
   ecat::ProcessDataSizes process_data_sizes() const override {
     return {kTestProcessDataBytes, kTestProcessDataBytes};
   }
-  size_t on_mailbox(std::span<const uint8_t>, std::span<uint8_t>) override { return 0; }
 
   void update_inputs(std::span<uint8_t> inputs) override {
     const size_t n = std::min(inputs.size(), last_outputs_.size());
@@ -58,7 +57,7 @@ class LoopbackApplication final : public ecat::Application {
   const std::vector<uint64_t>& sync0_times() const { return sync0_times_; }
   uint64_t outputs_received() const { return outputs_received_; }
   uint64_t watchdog_expiries() const { return watchdog_expiries_; }
-  ecat::AlState state() const { return state_; }
+  EsmState state() const { return state_; }
 
  private:
   static constexpr size_t kMaxSyncTimes = 1 << 17;
@@ -68,7 +67,7 @@ class LoopbackApplication final : public ecat::Application {
   uint64_t sync0_events_ = 0;
   uint64_t outputs_received_ = 0;
   uint64_t watchdog_expiries_ = 0;
-  ecat::AlState state_ = ecat::AlState::Init;
+  EsmState state_ = EsmState::Init;
 };
 
 }  // namespace rackcat::tests

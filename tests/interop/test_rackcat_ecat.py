@@ -166,5 +166,11 @@ def test_op_with_dc_and_loopback_1_slave(rackcat):
     _cyclic(rackcat(slaves=1), 1, CYCLES_1)
 
 
+def test_op_with_dc_and_loopback_through_lan9252_access(rackcat):
+    # The same firmware reaching its ESC through the LAN9252 host-bus protocol (CSR command /
+    # data registers, process RAM through the PRAM FIFOs) instead of the chip model's PDI.
+    _cyclic(rackcat(slaves=1, extra=["--pdi", "lan9252-emulated"]), 1, CYCLES_16)
+
+
 def test_op_with_dc_and_loopback_16_slaves(rackcat):
     _cyclic(rackcat(slaves=16, extra=["--no-pty"]), 16, CYCLES_16, reduced_map=True)

@@ -21,6 +21,9 @@ BASE = ["base/"]
 COE = BASE + ["coe/"]
 MDP = COE + ["mdp/", "foe/"]
 ECAT_PORT = ["ecat/pdi_port.hpp"]
+# What a device sees of ecat/: the device seam and the mailbox it registers its protocols with.
+ECAT_DEVICE_SEAM = ["ecat/application.hpp", "ecat/slave/mailbox_protocol.hpp",
+                    "ecat/slave/mailbox_server.hpp"]
 ECAT = BASE + ["ecat/"]
 RULES = {
     "base": BASE,
@@ -29,7 +32,6 @@ RULES = {
     "mdp": MDP,
     "esi": MDP + ["esi/"],
     # Generic devices from their ESI: the generic CoE/SII layers and the device seam only.
-    "device": COE + ["esi/", "ecat/application.hpp", "device/"],
     "modules/signals": BASE + ["modules/signals/"],
     "modules/canopen": COE + ["modules/canopen/"],
     "modules/cards": MDP + ["modules/signals/", "modules/cards/"],
@@ -46,7 +48,7 @@ RULES = {
     "ecat/lan9252": BASE + ECAT_PORT + ["ecat/lan9252/"],
     "ecat/host": ECAT,
     # Any device from its vendor ESI, served as an ecat::Application (like apps/rack_slave).
-    "device": COE + ["esi/", "ecat/application.hpp"],
+    "device": COE + ["esi/"] + ECAT_DEVICE_SEAM,
     "apps/rack_slave": MDP + ["ecat/", "esi/", "modules/", "apps/rack_slave/"],
     "apps": MDP + ["ecat/", "esi/", "modules/", "device/", "apps/"],
     # Tests and benchmarks of a layer see that layer and what it may see, plus their own folder.

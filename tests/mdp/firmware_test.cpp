@@ -200,7 +200,7 @@ TEST(FileAccess, FirmwareFileNamePattern) {
 
 class FileAccessTest : public FirmwareStoreTest {
  protected:
-  coe::EsmState state = coe::EsmState::PreOp;
+  EsmState state = EsmState::PreOp;
   Bytes restored;
   FirmwareStore store{StateDirectory::open(dir.string())};
   FileAccess files{store, 42, [this] {
@@ -225,9 +225,9 @@ TEST_F(FileAccessTest, StatesAndPasswordsPerFile) {
   EXPECT_EQ(out, Bytes{'P'});
   EXPECT_EQ(files.read_file("rackcat-x.rfw", 42, 100, out), FoeError::BootstrapOnly);
   EXPECT_EQ(files.begin_write("rackcat-x.rfw", 42), FoeError::BootstrapOnly);
-  state = coe::EsmState::SafeOp;
+  state = EsmState::SafeOp;
   EXPECT_EQ(files.begin_write("parameters.bin", 42), FoeError::AccessDenied);
-  state = coe::EsmState::Boot;
+  state = EsmState::Boot;
   EXPECT_EQ(files.begin_write("parameters.bin", 42), FoeError::NotBootstrap);
   EXPECT_EQ(files.read_file("parameters.bin", 42, 100, out), FoeError::NotBootstrap);
   EXPECT_EQ(files.read_file("rackcat-x.rfw", 42, 100, out), FoeError::None);

@@ -156,10 +156,10 @@ class DeviceSdoTest : public ::testing::Test {
     opt.state_dir = ::testing::TempDir() + "/" + state_dir_name_;
     device = std::make_unique<Device>(std::move(cfg), opt);
     sdo = std::make_unique<SdoClient>(*device);
-    go(coe::EsmState::PreOp);
+    go(EsmState::PreOp);
   }
-  void go(coe::EsmState to) {
-    const coe::EsmState from = device->state();
+  void go(EsmState to) {
+    const EsmState from = device->state();
     ASSERT_EQ(device->request_state(from, to), 0);
     device->state_changed(from, to);
   }

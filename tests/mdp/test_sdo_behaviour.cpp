@@ -10,7 +10,6 @@
 namespace rackcat::mdp {
 namespace {
 
-using coe::EsmState;
 using testing::SdoClient;
 
 constexpr uint32_t kDeviceState = 0x08000022;

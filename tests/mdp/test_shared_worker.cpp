@@ -18,7 +18,7 @@
 namespace rackcat::mdp {
 namespace {
 
-using coe::EsmState;
+using rackcat::EsmState;
 using testing::SdoClient;
 
 const std::vector<uint8_t> kStore{0x73, 0x61, 0x76, 0x65};  // "save" (guide: 0xFBF2)

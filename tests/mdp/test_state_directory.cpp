@@ -23,7 +23,6 @@ namespace rackcat::mdp {
 namespace {
 
 namespace fs = std::filesystem;
-using coe::EsmState;
 using testing::SdoClient;
 
 const std::vector<uint8_t> kStore{0x73, 0x61, 0x76, 0x65};

@@ -71,7 +71,7 @@ TEST(StoreCrash, KilledDuringStoreParametersCommandLeavesAConsistentDevice) {
   const std::vector<uint8_t> save{0x73, 0x61, 0x76, 0x65};
   {
     Device d(default_rack(), opt);
-    d.state_changed(coe::EsmState::Init, coe::EsmState::PreOp);
+    d.state_changed(EsmState::Init, EsmState::PreOp);
     testing::SdoClient sdo(d);
     ASSERT_EQ(sdo.write_text(0x2000, 0x04, "10.0.0.1"), 0u);
     ASSERT_EQ(sdo.download(0xFBF2, 1, save), 0u);
@@ -82,7 +82,7 @@ TEST(StoreCrash, KilledDuringStoreParametersCommandLeavesAConsistentDevice) {
     ASSERT_GE(child, 0);
     if (child == 0) {
       Device d(default_rack(), opt);
-      d.state_changed(coe::EsmState::Init, coe::EsmState::PreOp);
+      d.state_changed(EsmState::Init, EsmState::PreOp);
       testing::SdoClient sdo(d);
       for (int k = 0;; ++k) {
         sdo.write_text(0x2000, 0x04, (k % 2) ? "10.0.0.1" : "10.0.0.2");
@@ -92,7 +92,7 @@ TEST(StoreCrash, KilledDuringStoreParametersCommandLeavesAConsistentDevice) {
     }
     kill_after(child, rng);
     Device d(default_rack(), opt);
-    d.state_changed(coe::EsmState::Init, coe::EsmState::PreOp);
+    d.state_changed(EsmState::Init, EsmState::PreOp);
     testing::SdoClient sdo(d);
     ASSERT_NE(d.load_report().find("loaded"), std::string::npos) << i << ": " << d.load_report();
     const std::string ip = sdo.read_text(0x2000, 0x04);

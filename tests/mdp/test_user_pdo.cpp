@@ -13,7 +13,7 @@
 namespace rackcat::mdp {
 namespace {
 
-using coe::EsmState;
+using rackcat::EsmState;
 using testing::SdoClient;
 
 constexpr uint32_t kSubZero = 0x06010003;

@@ -15,7 +15,6 @@
 
 namespace rackcat::modules::testing {
 
-using coe::EsmState;
 
 inline mdp::DeviceOptions device_options() {
   mdp::DeviceOptions o;

@@ -180,7 +180,7 @@ TEST(CanopenPdo, InputsAndOutputsCrossTheBus) {
       seen = true;
       EXPECT_EQ(f.len, 8);
       EXPECT_EQ(f.data[2], 0x80);
-      EXPECT_EQ(coe::get_le16(&f.data[4]), 16384);  // round(5 * 32767 / 10)
+      EXPECT_EQ(le::get16(&f.data[4]), 16384);  // round(5 * 32767 / 10)
     }
   }
   EXPECT_TRUE(seen);

@@ -56,7 +56,7 @@ TEST_F(CanSdo, ExpeditedUploadOfVendorId) {
   EXPECT_EQ(r->data[1], 0x18);
   EXPECT_EQ(r->data[2], 0x10);
   EXPECT_EQ(r->data[3], 0x01);
-  EXPECT_EQ(coe::get_le32(&r->data[4]), rack.control.vendor_id);
+  EXPECT_EQ(le::get32(&r->data[4]), rack.control.vendor_id);
   // 0x1001 error register, one byte: 4F (n = 1).
   r = exchange({0x40, 0x01, 0x10, 0x00, 0, 0, 0, 0});
   ASSERT_TRUE(r);
@@ -70,7 +70,7 @@ TEST_F(CanSdo, SegmentedUploadOfDeviceName) {
   auto r = exchange({0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0});
   ASSERT_TRUE(r);
   EXPECT_EQ(r->data[0], 0x41);
-  EXPECT_EQ(coe::get_le32(&r->data[4]), name.size());
+  EXPECT_EQ(le::get32(&r->data[4]), name.size());
   // Segment 1 (toggle 0): 00 + 7 bytes, more to come.
   r = exchange({0x60, 0, 0, 0, 0, 0, 0, 0});
   ASSERT_TRUE(r);
@@ -91,13 +91,13 @@ TEST_F(CanSdo, WrongToggleAndUnknownObjectAbort) {
   r = exchange({0x70, 0, 0, 0, 0, 0, 0, 0});  // toggle 1 first: wrong
   ASSERT_TRUE(r);
   EXPECT_EQ(r->data[0], 0x80);
-  EXPECT_EQ(coe::get_le32(&r->data[4]), 0x05030000u);  // toggle bit not alternated
+  EXPECT_EQ(le::get32(&r->data[4]), 0x05030000u);  // toggle bit not alternated
   r = exchange({0x40, 0x34, 0x12, 0x00, 0, 0, 0, 0});
   ASSERT_TRUE(r);
   EXPECT_EQ(r->data[0], 0x80);
   EXPECT_EQ(r->data[1], 0x34);
   EXPECT_EQ(r->data[2], 0x12);
-  EXPECT_EQ(coe::get_le32(&r->data[4]), 0x06020000u);  // object does not exist
+  EXPECT_EQ(le::get32(&r->data[4]), 0x06020000u);  // object does not exist
   // A client abort gets no answer.
   EXPECT_FALSE(exchange({0x80, 0x08, 0x10, 0x00, 0, 0, 0x04, 0x05}));
 }
@@ -111,7 +111,7 @@ TEST_F(CanSdo, ExpeditedDownloadSetsHeartbeatTimeAndReadOnlyAborts) {
   r = exchange({0x23, 0x18, 0x10, 0x01, 1, 2, 3, 4});
   ASSERT_TRUE(r);
   EXPECT_EQ(r->data[0], 0x80);
-  EXPECT_EQ(coe::get_le32(&r->data[4]), 0x06010002u);  // read-only object
+  EXPECT_EQ(le::get32(&r->data[4]), 0x06010002u);  // read-only object
 }
 
 TEST_F(CanSdo, NoSdoInStopped) {
@@ -138,11 +138,11 @@ TEST_F(CanSdo, ClientReadsCardListSegmentedAndIdentityExpedited) {
   EXPECT_EQ(client.data(), node.profile().card_list);
   ASSERT_EQ(client.data().size(), 4 * rack.rim(2)->slots.size());
   // First entry: slot 1, its card ID (guide Table 3).
-  EXPECT_EQ(coe::get_le16(&client.data()[0]), 1);
-  EXPECT_EQ(coe::get_le16(&client.data()[2]), rack.rim(2)->slots[0].card->card_id);
+  EXPECT_EQ(le::get16(&client.data()[0]), 1);
+  EXPECT_EQ(le::get16(&client.data()[2]), rack.rim(2)->slots[0].card->card_id);
   run(0x1018, 2);
   ASSERT_EQ(client.status(), SdoClient::Status::Done);
-  EXPECT_EQ(coe::get_le32(client.data().data()), node.profile().identity.product_code);
+  EXPECT_EQ(le::get32(client.data().data()), node.profile().identity.product_code);
   run(0x1018, 9);
   EXPECT_EQ(client.status(), SdoClient::Status::Aborted);
   EXPECT_EQ(client.abort_code(), coe::AbortCode::SubindexNotFound);
@@ -157,5 +157,5 @@ TEST_F(CanSdo, ClientTimesOutWhenNobodyAnswers) {
   EXPECT_EQ(client.status(), SdoClient::Status::TimedOut);
   EXPECT_EQ(abort.id, 0x607u);
   EXPECT_EQ(abort.data[0], 0x80);
-  EXPECT_EQ(coe::get_le32(&abort.data[4]), 0x05040000u);
+  EXPECT_EQ(le::get32(&abort.data[4]), 0x05040000u);
 }

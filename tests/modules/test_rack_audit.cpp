@@ -9,7 +9,7 @@
 namespace rackcat::modules {
 namespace {
 
-using coe::EsmState;
+using rackcat::EsmState;
 using testing::RackTest;
 
 constexpr uint16_t kRim2Info = 0x2021;

@@ -23,7 +23,7 @@ int main() {
   const std::array<uint8_t, 16> request{10,   0,    0,    0,    0, 0x13, 0x00, 0x20,
                                         0x40, 0x00, 0x10, 0x00, 0, 0,    0,    0};
   std::array<uint8_t, 128> reply{};
-  const size_t n = sdo.handle(request, reply, coe::EsmState::PreOp);
+  const size_t n = sdo.handle(request, reply, EsmState::PreOp);
   if (n < 16 || reply[12] != 0x91 || reply[13] != 0x01 || reply[14] != 0x0F) {
     std::fprintf(stderr, "coe_only: unexpected SDO reply (%zu bytes)\n", n);
     return 1;

@@ -1,12 +1,12 @@
 // ESC core: power-on state, the datagram engine for one slave (ETG.1000.4 §5.4) and physical
 // memory access through the SyncManager and register rules.
-#include "ecat/esc.hpp"
+#include "ecat/esc/esc.hpp"
 
 #include <algorithm>
 #include <cstring>
 
 #include "ecat/frame.hpp"
-#include "ecat/le.hpp"
+#include "base/little_endian.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -18,8 +18,8 @@ constexpr uint16_t kEventDlStatus = 0x0004;
 
 }  // namespace
 
-Esc::Esc(Application& app, const Clock& clock, EscOptions options)
-    : app_(app), clock_(clock), options_(options) {
+Esc::Esc(SiiEeprom& eeprom, const Clock& clock, EscOptions options)
+    : eeprom_(eeprom), clock_(clock), options_(options) {
   if (options_.sii_read_bytes != 4) options_.sii_read_bytes = 8;
   sii_load_image();
   power_on_reset();
@@ -48,27 +48,22 @@ void Esc::power_on_reset() {
   le::put16(&mem_[reg::kDcSpeedCounterStart], 0x1000);
   mem_[reg::kDcFilterDepth] = 0x04;
   mem_[reg::kDcFilterDepth + 1] = 0x0C;
-  // AL: INIT, no error; AL control reads back INIT.
-  mem_[reg::kAlControl] = static_cast<uint8_t>(AlState::Init);
-  mem_[reg::kAlStatus] = static_cast<uint8_t>(AlState::Init);
+  // AL control and AL status reset values: 0x01 (INIT), no error (ESC datasheet 0x0120,
+  // 0x0130); from here on the firmware writes AL status.
+  mem_[reg::kAlControl] = 0x01;
+  mem_[reg::kAlStatus] = 0x01;
 
-  const AlState previous = state_;
-  state_ = AlState::Init;
-  al_control_pending_ = false;
-  sm_changed_ = 0;
-  dc_synchronised_ = false;
-  mailbox_work_ = false;
-  repeat_pending_ = false;
-  last_reply_len_ = 0;
+  reset_signal_ = true;
   sync0_running_ = sync1_running_ = false;
   watchdog_armed_ = false;
   reset_sequence_ = 0;
   local_offset_ = options_.power_on_local_time_ns - clock_.now_ns();
 
   sm_.fill(SmState{});
+  activate_seen_.fill(0);
   sm_enabled_mask_ = 0;
-  // In INIT the µC keeps every SyncManager deactivated from the PDI side (ETG.1000.6 §5.3:
-  // no mailbox and no process data in INIT).
+  // PDI control 0x0807 resets to "deactivated" (the firmware activates what its state allows,
+  // ETG.1000.6 §5.3); status "no buffer written".
   for (int i = 0; i < kSyncManagers; ++i) {
     mem_[reg::kSm + reg::kSmSize * i + reg::kSmPdiControlOffset] = 0x01;
     mem_[reg::kSm + reg::kSmSize * i + reg::kSmStatusOffset] = 0x30;  // no buffer written
@@ -78,7 +73,12 @@ void Esc::power_on_reset() {
 
   sii_reload_config_area();
   set_port1_link(port1_link_);
-  if (previous != AlState::Init) app_.on_state_changed(previous, AlState::Init);
+}
+
+bool Esc::take_reset() {
+  const bool reset = reset_signal_;
+  reset_signal_ = false;
+  return reset;
 }
 
 void Esc::set_port1_link(bool link) {
@@ -234,15 +234,6 @@ bool Esc::physical_write(uint16_t address, const uint8_t* src, uint16_t len) {
   if (done < len) std::memcpy(&mem_[address + done], src + done, len - done);
   sm_after_write(address, len);
   return true;
-}
-
-void Esc::end_frame() {
-  if (al_control_pending_) esm_control_written();
-  if (sm_changed_ != 0) esm_sm_changed();
-  // With SM1 free the device may also have an unsolicited message (Emergency) to send.
-  const bool sm1_free = state_ != AlState::Init && sm_[1].active &&
-                        (mem_[reg::kSm + reg::kSmSize + reg::kSmStatusOffset] & 0x08) == 0;
-  if (mailbox_work_ || repeat_pending_ || sm1_free) mailbox_service();
 }
 
 void Esc::count_frame_error() {

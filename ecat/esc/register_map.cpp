@@ -2,8 +2,8 @@
 // datasheet section II). Bytes not listed in the mask table are read-only for EtherCAT.
 #include <array>
 
-#include "ecat/esc.hpp"
-#include "ecat/le.hpp"
+#include "ecat/esc/esc.hpp"
+#include "base/little_endian.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -118,8 +118,7 @@ void Esc::after_register_write(uint16_t address, const uint8_t* src, uint16_t le
   }
   if (overlaps(address, len, reg::kDlControl, 4)) set_port1_link(port1_link_);
   if (overlaps(address, len, reg::kAlControl, 1)) {
-    // AL control event (0x0220 bit 0): the µC handles it after the frame (end_frame).
-    al_control_pending_ = true;
+    // AL control event (0x0220 bit 0, ESC datasheet): cleared when the PDI reads 0x0120.
     mem_[reg::kAlEventRequest] |= 0x01;
   }
   // Error counters: writing any RX error counter clears 0x0300-0x030B; the processing unit,

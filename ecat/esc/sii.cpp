@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cstring>
 
-#include "ecat/esc.hpp"
-#include "ecat/le.hpp"
+#include "ecat/esc/esc.hpp"
+#include "base/little_endian.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -39,7 +39,7 @@ uint8_t crc8(const uint8_t* p, size_t n) {
 }  // namespace
 
 void Esc::sii_load_image() {
-  const std::span<const uint8_t> image = app_.eeprom();
+  const std::span<const uint8_t> image = eeprom_.image();
   // Word 0x3E holds the EEPROM size in Kbit minus 1 (ETG.2010 Table 2); the device may hand
   // us a shorter image: the rest of the chip reads as erased (0xFF).
   size_t size = image.size();
@@ -99,7 +99,7 @@ void Esc::sii_command(uint8_t control_lo, uint8_t command, bool control_lo_writt
       }
       sii_[byte_address] = mem_[reg::kSiiData];
       sii_[byte_address + 1] = mem_[reg::kSiiData + 1];
-      app_.on_eeprom_write(static_cast<uint16_t>(byte_address / 2),
+      eeprom_.on_write(static_cast<uint16_t>(byte_address / 2),
                            std::span<const uint8_t>(&sii_[byte_address], 2));
       break;
     }

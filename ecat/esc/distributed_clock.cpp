@@ -5,8 +5,8 @@
 #include <cstdlib>
 #include <limits>
 
-#include "ecat/esc.hpp"
-#include "ecat/le.hpp"
+#include "ecat/esc/esc.hpp"
+#include "base/little_endian.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -112,18 +112,15 @@ void Esc::dc_activation_written() {
   } else if (!sync1) {
     sync1_running_ = false;
   }
-  if (dc_synchronised_ && !sync0 && (state_ == AlState::SafeOp || state_ == AlState::Op)) {
-    // The application follows SYNC0; without it the slave cannot keep its cycle.
-    dc_synchronised_ = false;
-    esm_error(AlState::SafeOp, 0x002C);
-  }
 }
 
 void Esc::fire_sync(int which, uint64_t system_time_ns) {
   which = which == 1 ? 1 : 0;
   mem_[reg::kDcSync0Status + which] |= 0x01;
   mem_[reg::kAlEventRequest] |= static_cast<uint8_t>(which == 0 ? 0x04 : 0x08);
-  app_.on_sync(which, system_time_ns);
+  // The pulse's time stays readable for the firmware: 0x0990 moves on to the next SYNC0 pulse
+  // after this one, 0x0998 keeps the SYNC1 pulse that fired.
+  if (which == 1) le::put64(&mem_[reg::kDcNextSync1], system_time_ns);
 }
 
 uint64_t Esc::next_sync_event_ns() const {

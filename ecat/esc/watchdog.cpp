@@ -1,10 +1,9 @@
 // Process-data watchdog (ETG.1000.4 §6.5.3, ESC datasheet 0x0400-0x0443): retriggered by every
 // completed write of a SyncManager with watchdog trigger enabled (SM2 in practice); on expiry
-// the status bit drops, the counter counts and an OP slave falls to SAFEOP with AL status
-// 0x001B after putting its outputs in the safe state.
-#include "base/event_log.hpp"
-#include "ecat/esc.hpp"
-#include "ecat/le.hpp"
+// the status bit 0x0440.0 drops, the counter 0x0442 counts and AL event request bit 6 rises.
+// What follows (outputs to the safe state, OP -> SAFEOP with 0x001B) is the firmware's part.
+#include "ecat/esc/esc.hpp"
+#include "base/little_endian.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -30,15 +29,7 @@ void Esc::watchdog_expired() {
   watchdog_armed_ = false;
   mem_[reg::kWatchdogStatusProcessData] &= static_cast<uint8_t>(~0x01);
   if (mem_[reg::kWatchdogCounterProcessData] != 0xFF) ++mem_[reg::kWatchdogCounterProcessData];
-  base::log_event({.kind = base::EventKind::WatchdogExpired,
-                   .a = static_cast<uint8_t>(state_),
-                   .station = le::get16(&mem_[reg::kStationAddress]),
-                   .value = mem_[reg::kWatchdogCounterProcessData]});
   mem_[reg::kAlEventRequest] |= 0x40;
-  if (state_ == AlState::Op) {
-    app_.on_watchdog_expired();
-    esm_error(AlState::SafeOp, 0x001B);
-  }
 }
 
 }  // namespace rackcat::ecat

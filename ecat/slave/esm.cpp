@@ -1,13 +1,12 @@
-// The EtherCAT state machine (ETG.1000.6 §5.3) as the µC behind the PDI runs it: AL control
-// requests, the transition table, the checks that produce AL status codes, the error flag
-// and its acknowledge.
+// The EtherCAT state machine (ETG.1000.6 §5.3) as the firmware runs it behind the PDI: AL
+// control requests (0x0120), the transition table, the checks that produce AL status codes
+// (ETG.1000.6 Table 11), the error flag and its acknowledge, and what each state opens: SM0/SM1
+// from PREOP (or BOOT), SM2/SM3 from SAFEOP, by the PDI deactivate bits 0x0807+8n.
 #include <array>
 
-#include "base/event_log.hpp"
 #include "ecat/al_status_code.hpp"
-#include "ecat/esc.hpp"
-#include "ecat/le.hpp"
 #include "ecat/registers.hpp"
+#include "ecat/slave/firmware.hpp"
 
 namespace rackcat::ecat {
 
@@ -25,17 +24,17 @@ enum class Check : uint8_t {
   Operational,  // SAFEOP -> OP: SYNC still running when synchronised (0x002C)
 };
 
-constexpr int index_of(AlState s) {
+constexpr int index_of(EsmState s) {
   switch (s) {
-    case AlState::Init:
+    case EsmState::Init:
       return 0;
-    case AlState::PreOp:
+    case EsmState::PreOp:
       return 1;
-    case AlState::Boot:
+    case EsmState::Boot:
       return 2;
-    case AlState::SafeOp:
+    case EsmState::SafeOp:
       return 3;
-    case AlState::Op:
+    case EsmState::Op:
       return 4;
   }
   return 0;
@@ -51,12 +50,7 @@ constexpr std::array<std::array<Check, 5>, 5> kTransitions{{
     {C::None, C::None, C::Invalid, C::None, C::None},
 }};
 
-constexpr bool valid_state(uint8_t v) {
-  return v == 0x01 || v == 0x02 || v == 0x03 || v == 0x04 || v == 0x08;
-}
-
 constexpr uint8_t kErrorFlag = 0x10;
-constexpr uint16_t kEventAlStatus = 0x0008;
 
 bool ranges_overlap(uint32_t a, uint32_t alen, uint32_t b, uint32_t blen) {
   return a < b + blen && b < a + alen;
@@ -64,36 +58,40 @@ bool ranges_overlap(uint32_t a, uint32_t alen, uint32_t b, uint32_t blen) {
 
 }  // namespace
 
-void Esc::esm_control_written() {
-  al_control_pending_ = false;
-  mem_[reg::kAlEventRequest] &= static_cast<uint8_t>(~0x01);
-  const uint8_t control = mem_[reg::kAlControl];
+uint16_t Firmware::sii_word(size_t word) const {
+  const std::span<const uint8_t> sii = app_.eeprom();
+  return 2 * word + 1 < sii.size() ? le::get16(&sii[2 * word]) : 0;
+}
+
+void Firmware::esm_control_written() {
+  // Reading AL control clears AL event request bit 0.
+  const uint8_t control = pdi_.read8(reg::kAlControl);
+  al_control_ = control;
   const uint8_t requested = control & 0x0F;
   const bool acknowledge = control & kErrorFlag;
-  if (al_error()) {
+  if (error_) {
     // With the error flag set, only an acknowledged request (state | 0x10) or INIT is taken;
     // anything else leaves state and code as they are (ETG.1000.6 §5.3.2).
-    if (!acknowledge && requested != static_cast<uint8_t>(AlState::Init)) return;
-    mem_[reg::kAlStatus] &= static_cast<uint8_t>(~kErrorFlag);
-    le::put16(&mem_[reg::kAlStatusCode], al_code::kNoError);
-    esm_write_status();
+    if (!acknowledge && requested != static_cast<uint8_t>(EsmState::Init)) return;
+    esm_clear_error();
   }
-  if (!valid_state(requested)) {
-    esm_error(state_, al_code::kUnknownState);
+  if (!is_esm_state(requested)) {
+    esm_error(state_, al_code::kUnknownState, state_);
     return;
   }
-  const auto to = static_cast<AlState>(requested);
+  const auto to = static_cast<EsmState>(requested);
   if (to == state_) return;
+  read_sms();
   uint16_t code = esm_check_transition(state_, to);
   if (code == 0) code = app_.on_state_request(state_, to);
   if (code != 0) {
-    esm_error(state_, code);
+    esm_error(state_, code, to);
     return;
   }
   esm_enter(to);
 }
 
-uint16_t Esc::esm_check_transition(AlState from, AlState to) {
+uint16_t Firmware::esm_check_transition(EsmState from, EsmState to) {
   switch (kTransitions[index_of(from)][index_of(to)]) {
     case Check::None:
       return 0;
@@ -106,26 +104,23 @@ uint16_t Esc::esm_check_transition(AlState from, AlState to) {
     case Check::ProcessData:
       return esm_check_process_data();
     case Check::Operational:
-      return dc_synchronised_ && !sync0_running_ ? al_code::kFatalSyncError : 0;
+      return dc_synchronised_ && !sync0_active() ? al_code::kFatalSyncError : 0;
   }
   return al_code::kInvalidStateChange;
 }
 
-uint16_t Esc::esm_check_mailbox(bool bootstrap) const {
+uint16_t Firmware::esm_check_mailbox(bool bootstrap) const {
   // SII words 0x14-0x17 (bootstrap) or 0x18-0x1B (standard): receive mailbox offset and
   // size (SM0), send mailbox offset and size (SM1) (ETG.2010 Table 2).
   const size_t word = bootstrap ? 0x14 : 0x18;
-  auto sii_word = [&](size_t w) -> uint16_t {
-    return 2 * w + 1 < sii_.size() ? le::get16(&sii_[2 * w]) : 0;
-  };
   const uint16_t rx_offset = sii_word(word), rx_size = sii_word(word + 1);
   const uint16_t tx_offset = sii_word(word + 2), tx_size = sii_word(word + 3);
   if (bootstrap && (rx_size == 0 || tx_size == 0)) return al_code::kBootstrapNotSupported;
   if (!bootstrap && rx_size == 0 && tx_size == 0) return 0;  // a device without mailbox
   const uint16_t code =
       bootstrap ? al_code::kInvalidBootMailboxConfig : al_code::kInvalidMailboxConfig;
-  const SmState& rx = sm_[0];
-  const SmState& tx = sm_[1];
+  const Sm& rx = sm_[0];
+  const Sm& tx = sm_[1];
   // Mailbox mode (control bits 1:0 = 10b), SM0 ECAT writes (bits 3:2 = 01b), SM1 ECAT reads.
   if (!rx.enabled || rx.start != rx_offset || rx.length != rx_size || (rx.control & 0x0F) != 0x06) {
     return code;
@@ -137,18 +132,22 @@ uint16_t Esc::esm_check_mailbox(bool bootstrap) const {
   return 0;
 }
 
-uint16_t Esc::esm_check_process_data() const {
-  // 0x0017: every enabled SyncManager lies in process RAM and no two overlap.
-  for (int i = 0; i < kSyncManagers; ++i) {
-    const SmState& a = sm_[i];
-    if (!a.enabled) continue;
-    if (a.start < reg::kProcessRam ||
-        static_cast<uint32_t>(a.start) + a.length > reg::kAddressSpace) {
-      return al_code::kInvalidSmConfig;
-    }
-    for (int j = i + 1; j < kSyncManagers; ++j) {
-      const SmState& b = sm_[j];
-      if (b.enabled && ranges_overlap(a.start, a.length, b.start, b.length)) {
+uint16_t Firmware::esm_check_process_data() {
+  // 0x0017: every enabled SyncManager lies in process RAM and no two overlap (all 16 are
+  // read here, at the transition, not on the cyclic path).
+  uint8_t regs[16 * reg::kSmSize];
+  pdi_.read(reg::kSm, regs);
+  auto start = [&](int n) { return le::get16(&regs[n * reg::kSmSize]); };
+  auto length = [&](int n) { return le::get16(&regs[n * reg::kSmSize + 2]); };
+  auto enabled = [&](int n) {
+    return (regs[n * reg::kSmSize + reg::kSmActivateOffset] & reg::sm::kActivateEnable) &&
+           length(n) != 0 && static_cast<uint32_t>(start(n)) + length(n) <= reg::kAddressSpace;
+  };
+  for (int i = 0; i < 16; ++i) {
+    if (!enabled(i)) continue;
+    if (start(i) < reg::kProcessRam) return al_code::kInvalidSmConfig;
+    for (int j = i + 1; j < 16; ++j) {
+      if (enabled(j) && ranges_overlap(start(i), length(i), start(j), length(j))) {
         return al_code::kInvalidSmConfig;
       }
     }
@@ -157,7 +156,7 @@ uint16_t Esc::esm_check_process_data() const {
   // buffered mode with the right direction; a device without outputs (inputs) needs SM2
   // (SM3) disabled (ETG.1000.6 Table 11).
   const ProcessDataSizes sizes = app_.process_data_sizes();
-  const SmState& out = sm_[2];
+  const Sm& out = sm_[2];
   if (sizes.outputs != 0) {
     if (!out.enabled || out.length != sizes.outputs || (out.control & 0x0F) != 0x04) {
       return al_code::kInvalidOutputConfig;
@@ -165,7 +164,7 @@ uint16_t Esc::esm_check_process_data() const {
   } else if (out.enabled) {
     return al_code::kInvalidOutputConfig;
   }
-  const SmState& in = sm_[3];
+  const Sm& in = sm_[3];
   if (sizes.inputs != 0) {
     if (!in.enabled || in.length != sizes.inputs || (in.control & 0x0F) != 0x00) {
       return al_code::kInvalidInputConfig;
@@ -176,119 +175,128 @@ uint16_t Esc::esm_check_process_data() const {
   return esm_check_dc();
 }
 
-uint16_t Esc::esm_check_dc() const {
+uint16_t Firmware::esm_check_dc() {
   // 0x0030: SYNC outputs need the cyclic unit (bit 0), SYNC1 needs SYNC0, and SYNC0 needs a
   // cycle time (0 would be a single shot, no cycle to follow).
-  const uint8_t activation = mem_[reg::kDcActivation];
+  const uint8_t activation = pdi_.read8(reg::kDcActivation);
   const bool cyclic = activation & 0x01;
   const bool sync0 = activation & 0x02;
   const bool sync1 = activation & 0x04;
   if ((sync0 || sync1) && !cyclic) return al_code::kInvalidDcSyncConfig;
   if (sync1 && !sync0) return al_code::kInvalidDcSyncConfig;
-  if (sync0 && le::get32(&mem_[reg::kDcSync0Cycle]) == 0) return al_code::kInvalidDcSyncConfig;
+  if (sync0 && pdi_.read32(reg::kDcSync0Cycle) == 0) return al_code::kInvalidDcSyncConfig;
   return 0;
 }
 
-void Esc::esm_sm_changed() {
+bool Firmware::sync0_active() {
+  return (pdi_.read8(reg::kDcActivation) & 0x03) == 0x03;
+}
+
+void Firmware::esm_sm_changed(const std::array<Sm, 4>& before) {
   // ETG.1000.6 §5.3: the SyncManager settings checked on the way up must stay valid. A master
   // that disables or moves SM2/SM3 in SAFEOP/OP sends the slave back to PREOP with 0x001D /
   // 0x001E; SM0/SM1 changed in PREOP or above send it to INIT with 0x0016.
-  const uint8_t changed = sm_changed_;
-  sm_changed_ = 0;
-  const bool mailbox_state =
-      state_ == AlState::PreOp || state_ == AlState::SafeOp || state_ == AlState::Op;
-  if ((changed & 0x03) && mailbox_state && esm_check_mailbox(false) != 0) {
-    esm_error(AlState::Init, al_code::kInvalidMailboxConfig);
-    return;
-  }
-  if ((changed & 0x0C) && (state_ == AlState::SafeOp || state_ == AlState::Op)) {
-    const uint16_t code = esm_check_process_data();
-    if (code != 0) esm_error(AlState::PreOp, code);
-  }
-}
-
-void Esc::esm_log(base::EventKind kind, uint8_t from, uint8_t to, uint16_t code) const {
-  base::log_event({.kind = kind,
-                   .a = from,
-                   .b = to,
-                   .c = mem_[reg::kAlControl],
-                   .code = code,
-                   .station = le::get16(&mem_[reg::kStationAddress])});
-}
-
-void Esc::esm_enter(AlState to) {
-  const AlState from = state_;
-  if (to == AlState::Init) {
-    for (int n = 0; n < kSyncManagers; ++n) set_sm_pdi_deactivated(n, true);
-    last_reply_len_ = 0;
-    repeat_pending_ = false;
-  }
-  if (to == AlState::PreOp || to == AlState::Boot) {
-    if (from == AlState::Init) {
-      set_sm_pdi_deactivated(0, false);
-      set_sm_pdi_deactivated(1, false);
-      mailbox_work_ = true;
-    } else {
-      set_sm_pdi_deactivated(2, true);
-      set_sm_pdi_deactivated(3, true);
+  uint8_t changed = 0;
+  for (int n = 0; n < 4; ++n) {
+    const Sm& a = before[n];
+    const Sm& b = sm_[n];
+    if (a.enabled != b.enabled || a.start != b.start || a.length != b.length ||
+        a.control != b.control) {
+      changed |= static_cast<uint8_t>(1u << n);
     }
   }
-  if (to == AlState::Init || to == AlState::PreOp || to == AlState::Boot) {
-    dc_synchronised_ = false;
-    watchdog_armed_ = false;
+  const bool mailbox_state =
+      state_ == EsmState::PreOp || state_ == EsmState::SafeOp || state_ == EsmState::Op;
+  if ((changed & 0x03) && mailbox_state && esm_check_mailbox(false) != 0) {
+    esm_error(EsmState::Init, al_code::kInvalidMailboxConfig, state_);
+    return;
   }
-  if (to == AlState::SafeOp && from == AlState::PreOp) {
-    outputs_.assign(sm_[2].enabled ? sm_[2].length : 0, 0);
-    set_sm_pdi_deactivated(2, false);
-    set_sm_pdi_deactivated(3, false);
-    dc_synchronised_ = sync0_running_;
+  if ((changed & 0x0C) && (state_ == EsmState::SafeOp || state_ == EsmState::Op)) {
+    const uint16_t code = esm_check_process_data();
+    if (code != 0) esm_error(EsmState::PreOp, code, state_);
   }
-  state_ = to;
-  if (to == AlState::Op && sm_[2].enabled && (sm_[2].control & 0x40)) {
-    watchdog_trigger(pass_.port0_ns);  // the watchdog starts counting with OP
-  }
-  esm_write_status();
-  esm_log(base::EventKind::EsmTransition, static_cast<uint8_t>(from), static_cast<uint8_t>(to),
-          le::get16(&mem_[reg::kAlStatusCode]));
-  app_.on_state_changed(from, to);
 }
 
-void Esc::application_error(AlState fall_to, uint16_t code) {
+void Firmware::set_sm_deactivated(int n, bool deactivated) {
+  const auto address = static_cast<uint16_t>(reg::sm::base(n) + reg::kSmPdiControlOffset);
+  const uint8_t pdi = pdi_.read8(address);
+  const auto value = static_cast<uint8_t>(deactivated ? (pdi | reg::sm::kPdiDeactivate)
+                                                      : (pdi & ~reg::sm::kPdiDeactivate));
+  if (value != pdi) pdi_.write8(address, value);
+}
+
+void Firmware::esm_enter(EsmState to) {
+  const EsmState from = state_;
+  if (to == EsmState::Init) {
+    for (int n = 0; n < 16; ++n) set_sm_deactivated(n, true);
+    mailbox_.stop();
+  }
+  if (to == EsmState::PreOp || to == EsmState::Boot) {
+    if (from == EsmState::Init) {
+      set_sm_deactivated(0, false);
+      set_sm_deactivated(1, false);
+      mailbox_.start(sm_[0].start, sm_[0].length, sm_[1].start, sm_[1].length);
+    } else {
+      set_sm_deactivated(2, true);
+      set_sm_deactivated(3, true);
+    }
+  }
+  if (to == EsmState::Init || to == EsmState::PreOp || to == EsmState::Boot) {
+    dc_synchronised_ = false;
+  }
+  sm_taken_ = sm_;
+  state_ = to;
+  if (to == EsmState::SafeOp && from == EsmState::PreOp) {
+    dc_synchronised_ = sync0_active();
+    pd_start();
+  }
+  esm_write_status();
+  app_.on_state_changed(from, to);
+  if (observer_ != nullptr) observer_->on_transition(from, to);
+}
+
+void Firmware::application_error(EsmState fall_to, uint16_t code) {
   // Only a step down the table is taken (OP -> SAFEOP/PREOP/INIT, BOOT -> INIT, ...); anything
   // else (a "fall" to BOOT, to the same or a higher state) keeps the state and sets the error.
   constexpr int kRank[5] = {0, 1, 1, 2, 3};  // INIT, PREOP, BOOT, SAFEOP, OP
   const int from = index_of(state_);
   const int to = index_of(fall_to);
   const bool step_down = kRank[to] < kRank[from] && kTransitions[from][to] == Check::None;
-  esm_error(step_down ? fall_to : state_, code);
+  esm_error(step_down ? fall_to : state_, code, state_);
 }
 
-void Esc::application_restart() {
-  mem_[reg::kAlStatus] &= static_cast<uint8_t>(~kErrorFlag);
-  le::put16(&mem_[reg::kAlStatusCode], 0);
-  if (state_ != AlState::Init) {
-    esm_enter(AlState::Init);
+void Firmware::application_restart() {
+  if (error_) esm_clear_error();
+  if (state_ != EsmState::Init) {
+    esm_enter(EsmState::Init);
   } else {
     esm_write_status();
   }
 }
 
-void Esc::esm_error(AlState stay_or_fall_to, uint16_t code) {
-  esm_log(base::EventKind::EsmError, static_cast<uint8_t>(state_),
-          static_cast<uint8_t>(stay_or_fall_to), code);
+void Firmware::esm_error(EsmState stay_or_fall_to, uint16_t code, EsmState requested) {
+  const EsmState from = state_;
   if (stay_or_fall_to != state_) esm_enter(stay_or_fall_to);
-  mem_[reg::kAlStatus] |= kErrorFlag;
-  le::put16(&mem_[reg::kAlStatusCode], code);
+  error_ = true;
+  code_ = code;
+  pdi_.write16(reg::kAlStatusCode, code);
   esm_write_status();
+  if (observer_ != nullptr) observer_->on_al_error(from, state_, requested, al_control_, code);
 }
 
-void Esc::esm_write_status() {
-  const uint8_t status =
-      static_cast<uint8_t>(static_cast<uint8_t>(state_) | (mem_[reg::kAlStatus] & kErrorFlag));
-  mem_[reg::kAlStatus] = status;
-  mem_[reg::kAlStatus + 1] = 0;
-  le::put16(&mem_[reg::kEcatEventRequest],
-            le::get16(&mem_[reg::kEcatEventRequest]) | kEventAlStatus);
+void Firmware::esm_clear_error() {
+  error_ = false;
+  code_ = al_code::kNoError;
+  pdi_.write16(reg::kAlStatusCode, al_code::kNoError);
+  esm_write_status();
+  if (observer_ != nullptr) observer_->on_error_cleared(state_);
+}
+
+void Firmware::esm_write_status() {
+  // AL status 0x0130: state bits 3..0 and the error flag; the chip raises the master's AL
+  // status event (0x0210 bit 3) on the write.
+  pdi_.write16(reg::kAlStatus,
+               static_cast<uint16_t>(static_cast<uint8_t>(state_) | (error_ ? kErrorFlag : 0)));
 }
 
 }  // namespace rackcat::ecat

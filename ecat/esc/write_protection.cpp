@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "ecat/esc.hpp"
+#include "ecat/esc/esc.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {

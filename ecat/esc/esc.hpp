@@ -1,8 +1,14 @@
-// One emulated EtherCAT slave controller (ESC), ET1100-class: a 64 KiB address space with the
-// registers 0x0000-0x0FFF behaving as ETG.1000.4 §6 and the Beckhoff ESC datasheet (section II)
-// describe them, process RAM 0x1000-0xFFFF, 16 FMMUs, 16 SyncManagers, the SII EEPROM
-// interface, distributed clocks and the AL state machine (ETG.1000.6 §5.3) that a µC-based
-// slave would run behind its PDI. docs/ESC.md is the one-page register model.
+// One emulated EtherCAT slave controller (ESC), ET1100-class: the chip only. A 64 KiB address
+// space with the registers 0x0000-0x0FFF behaving as ETG.1000.4 §6 and the Beckhoff ESC
+// datasheet (section II) describe them, process RAM 0x1000-0xFFFF, 16 FMMUs, 16 SyncManagers,
+// the SII EEPROM interface, distributed clocks with SYNC0/SYNC1, the process-data watchdog,
+// the datagram engine on the EtherCAT side and the PDI on the other (pdi_read/pdi_write, the
+// IRQ line). docs/ESC.md is the one-page register model.
+//
+// The chip knows no AL state: AL control 0x0120 is a register the master writes (raising AL
+// event request 0x0220 bit 0), AL status 0x0130/0x0134 are registers the firmware writes
+// through the PDI. The firmware (ecat/slave) runs the ESM, the mailbox and the process data
+// behind an EscPdi (esc_pdi.hpp), as a microcontroller behind a real ESC would.
 //
 // The ESC never allocates on the datagram path. It is driven by a Segment (segment.hpp), which
 // hands it each datagram of each frame in line order; tests may drive it the same way.
@@ -14,12 +20,7 @@
 #include <span>
 #include <vector>
 
-#include "ecat/application.hpp"
 #include "ecat/clock.hpp"
-
-namespace rackcat::base {
-enum class EventKind : uint8_t;
-}  // namespace rackcat::base
 
 namespace rackcat::ecat {
 
@@ -45,15 +46,25 @@ struct PassTimes {
   uint64_t port1_ns = 0;  // the same frame coming back at port 1
 };
 
+// The SII EEPROM chip next to the ESC (ETG.2010): its content at power-on and where master
+// writes through the SII interface (0x0502-0x050F) are stored.
+class SiiEeprom {
+ public:
+  virtual ~SiiEeprom() = default;
+  // Byte-addressed little-endian words; must stay valid while the ESC is constructed.
+  virtual std::span<const uint8_t> image() const = 0;
+  virtual void on_write(uint16_t /*word_address*/, std::span<const uint8_t> /*data*/) {}
+};
+
 class Esc {
  public:
   static constexpr size_t kMemorySize = 0x10000;
   static constexpr int kFmmus = 16;
   static constexpr int kSyncManagers = 16;
 
-  // The application and the clock must outlive the ESC. The SII image is copied (the master
-  // may write it); the power-on EEPROM load (words 0-7, ETG.1000.4 §6.4.5) runs here.
-  Esc(Application& app, const Clock& clock, EscOptions options = {});
+  // The EEPROM and the clock must outlive the ESC. The SII image is copied (the master may
+  // write it); the power-on EEPROM load (words 0-7, ETG.1000.4 §6.4.5) runs here.
+  Esc(SiiEeprom& eeprom, const Clock& clock, EscOptions options = {});
   Esc(const Esc&) = delete;
   Esc& operator=(const Esc&) = delete;
 
@@ -67,9 +78,6 @@ class Esc {
   // data and working counter are updated in place per ETG.1000.4 §5.4. The IRQ field is ORed
   // with this ESC's masked ECAT event request (0x0210 & 0x0200).
   void process_datagram(uint8_t* datagram, uint16_t data_len);
-  // The frame has left this ESC: the "µC" behind the PDI runs (AL control requests, mailbox
-  // hand-over, repeat requests), as it would between two frames.
-  void end_frame();
   // A frame this ESC could not parse (chain past the end, bad length): counts it in the
   // processing-unit and port-0 RX error counters (0x030C, 0x0300).
   void count_frame_error();
@@ -83,9 +91,21 @@ class Esc {
   uint64_t next_event_ns() const;
   // Clock time of the next SYNC0/SYNC1 event; UINT64_MAX when that unit is not running.
   uint64_t next_sync_event_ns() const;
-  // Raises a SYNC event now: Application::on_sync(which, system_time_ns), SYNC status
-  // 0x098E/0x098F and AL event bits 2/3. `which` is 0 or 1.
+  // Raises a SYNC event now: SYNC status 0x098E/0x098F and AL event bits 2/3; the pulse's
+  // system time is what 0x0990 (SYNC0) / 0x0998 (SYNC1) show. `which` is 0 or 1.
   void fire_sync(int which, uint64_t system_time_ns);
+
+  // ---- PDI: the microcontroller's side (ETG.1000.4 §6; ESC datasheet "PDI access") --------
+  // Register and process-RAM access with the ESC's PDI-side rules: PDI-writable registers
+  // only (AL status and code, AL event mask, SM PDI control, user RAM), SyncManager buffers
+  // with their hand-over (see esc/pdi.cpp). Accesses past 0xFFFF are cut at the end.
+  void pdi_read(uint16_t address, uint8_t* dst, uint16_t len);
+  void pdi_write(uint16_t address, const uint8_t* src, uint16_t len);
+  // The IRQ output: AL event request 0x0220 & AL event mask 0x0204.
+  bool pdi_irq() const;
+  // The ESC was reset (power-on or 'R','E','S' to 0x0040) since the last call: the reset
+  // output that restarts the microcontroller behind it (ESC datasheet 0x0040).
+  bool take_reset();
 
   // ---- port wiring (set by Segment) ----------------------------------------------------------
   // Whether a cable with a live partner is on port 1 (port 0 always has the master side).
@@ -94,19 +114,9 @@ class Esc {
   // closed by DL control 0x0101 (ETG.1000.4 §6.3.1: 11b = closed, 01b = auto-close).
   bool forwards_to_port1() const;
 
-  // The local application reports an error (ETG.1000.6 §5.3.3, "local error"): the ESM falls
-  // to `fall_to` if that is below the current state (never rises), sets the error flag and
-  // `code` in 0x0134 until the master acknowledges. E.g. a RIM lost with Detect Modules
-  // Override 0 in OP: SAFEOP with the device's code.
-  void application_error(AlState fall_to, uint16_t code);
-  // The local application restarted (e.g. the device reset command 0xFBF0, ETG.5003.1): the
-  // ESM is back in INIT with no error, as after the application's own power-on; the master
-  // sees INIT in 0x0130 and configures the slave again. Registers the master wrote (station
-  // address, SM/FMMU settings) are kept, as they are when only the µC behind an ESC resets.
-  void application_restart();
-
   // ---- observers (tests, CLI, the link) -------------------------------------------------------
-  AlState al_state() const { return state_; }
+  // AL status 0x0130 as the firmware last wrote it (state bits 3..0, error flag bit 4).
+  uint8_t al_status() const { return mem_[0x0130]; }
   bool al_error() const;
   uint16_t al_status_code() const;
   uint16_t station_address() const;
@@ -121,7 +131,6 @@ class Esc {
   // The SII EEPROM as the ESC holds it (initial image plus master writes), padded with 0xFF
   // to the size declared in word 0x3E.
   std::span<const uint8_t> eeprom() const { return sii_; }
-  Application& application() const { return app_; }
 
  private:
   struct SmState {
@@ -131,7 +140,6 @@ class Esc {
     bool enabled = false;         // ECAT activate bit (0x0806 bit 0) and a non-zero length
     bool active = false;          // enabled and not deactivated by the PDI (0x0807 bit 0)
     uint8_t next_buffer = 0;      // buffered mode: buffer index that receives the next write
-    bool repeat_request = false;  // last seen 0x0806 bit 1 (mailbox repeat, ETG.1000.4 §6.7.3)
   };
   struct FmmuState {
     uint32_t logical_start = 0;
@@ -173,10 +181,13 @@ class Esc {
   void sm_after_read(uint16_t address, uint16_t len);
   bool sm_allows_write(uint16_t address, uint16_t len);
   void sm_after_write(uint16_t address, uint16_t len);
-  void sm_activation_written(int index, uint8_t old_activate);
-  void set_sm_pdi_deactivated(int index, bool deactivated);
-  void mailbox_service();
   void update_ecat_event(int index);
+  void update_al_event(int index);
+  // pdi.cpp: the microcontroller's accesses.
+  bool pdi_buffer_write(uint16_t address, const uint8_t* src, uint16_t len);
+  void pdi_buffer_read_done(uint16_t address, uint16_t len);
+  void pdi_registers_written(uint16_t address, const uint8_t* src, uint16_t len);
+  void pdi_registers_read(uint16_t address, uint16_t len);
   // sii.cpp: EEPROM interface.
   void sii_load_image();
   void sii_reload_config_area();
@@ -187,24 +198,12 @@ class Esc {
   void dc_activation_written();
   void dc_prepare_system_time_read();
   uint64_t clock_of_system_time(uint64_t system_time) const;
-  // esm.cpp: the AL state machine.
-  void esm_control_written();
-  uint16_t esm_check_transition(AlState from, AlState to);
-  uint16_t esm_check_mailbox(bool bootstrap) const;
-  uint16_t esm_check_process_data() const;
-  uint16_t esm_check_dc() const;
-  void esm_enter(AlState to);
-  void esm_error(AlState stay_or_fall_to, uint16_t code);
-  // Reports a transition or an error to the log (base/event_log.hpp); allocation-free.
-  void esm_log(base::EventKind kind, uint8_t from, uint8_t to, uint16_t code) const;
-  void esm_write_status();
-  void esm_sm_changed();
   // watchdog.cpp
   uint64_t watchdog_period_ns() const;
   void watchdog_trigger(uint64_t now_ns);
   void watchdog_expired();
 
-  Application& app_;
+  SiiEeprom& eeprom_;
   const Clock& clock_;
   EscOptions options_;
   std::array<uint8_t, kMemorySize> mem_{};
@@ -212,6 +211,7 @@ class Esc {
   PassTimes pass_{};
 
   std::array<SmState, kSyncManagers> sm_{};
+  std::array<uint8_t, kSyncManagers> activate_seen_{};  // 0x0806+8n at the last reload
   uint16_t sm_enabled_mask_ = 0;
   std::array<FmmuState, kFmmus> fmmu_{};
   std::array<uint8_t, kFmmus> fmmu_active_{};  // indices of activated FMMUs, in order
@@ -222,19 +222,7 @@ class Esc {
   bool register_write_enabled_ = false;  // 0x0020 bit 0 written in the current frame
   bool esc_write_enabled_ = false;       // 0x0030 bit 0 written in the current frame
 
-  // ESM
-  AlState state_ = AlState::Init;
-  bool al_control_pending_ = false;
-  uint8_t sm_changed_ = 0;        // SMs 0-3 reconfigured by the master since the last frame end
-  bool dc_synchronised_ = false;  // SYNC0 was running when SAFEOP was entered
-
-  // Mailbox (SM0 receive, SM1 send by ETG convention, validated by the ESM).
-  bool mailbox_work_ = false;
-  bool repeat_pending_ = false;
-  std::vector<uint8_t> last_reply_;
-  size_t last_reply_len_ = 0;
-  // SM2 outputs as last completed by the master: the consistent image on_outputs gets.
-  std::vector<uint8_t> outputs_;
+  bool reset_signal_ = true;  // raised by every reset until take_reset()
 
   // Distributed clocks: local(t) = t + local_offset_; system = local + 0x0920.
   uint64_t local_offset_ = 0;

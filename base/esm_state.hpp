@@ -1,0 +1,19 @@
+// The EtherCAT state machine's states (ETG.1000.6 §5.3), encoded as in AL control 0x0120 and
+// AL status 0x0130 bits 3..0 (ETG.1000.6 Table 9, ETG.1000.4 §6.4). The one state type of the
+// stack: the firmware's ESM reports it, CoE access rights (ETG.1000.6 §5.6.2) are checked
+// against it.
+#pragma once
+
+#include <cstdint>
+
+namespace rackcat {
+
+enum class EsmState : uint8_t { Init = 0x01, PreOp = 0x02, Boot = 0x03, SafeOp = 0x04, Op = 0x08 };
+
+// Whether `v` (AL control bits 3..0) names a state; anything else is refused with AL status
+// 0x0012 "unknown requested state" (ETG.1000.6 Table 11).
+constexpr bool is_esm_state(uint8_t v) {
+  return v == 0x01 || v == 0x02 || v == 0x03 || v == 0x04 || v == 0x08;
+}
+
+}  // namespace rackcat

@@ -1,0 +1,175 @@
+// The ESC's PDI side: what the microcontroller's register reads and writes do (ETG.1000.4 §6,
+// Beckhoff ESC datasheet section II, "PDI" columns of each register).
+//
+// Registers. The PDI writes AL status 0x0130 (raising ECAT event 0x0210 bit 3 for the master),
+// AL status code 0x0134, the AL event mask 0x0204, the PDI control byte of each SyncManager
+// (0x0807+8n: bit 0 deactivate, bit 1 repeat acknowledge) and the user RAM 0x0F80; everything
+// else is read-only for it. Reads clear the AL event they announce: 0x0120 (AL control) bit 0,
+// an SM activation register 0x0806+8n bit 4, 0x0440 (watchdog status) bit 6, 0x098E/0x098F
+// (SYNC0/1 status, also cleared) bits 2/3.
+//
+// SyncManager buffers, seen from the PDI (ETG.1000.4 §6.7.1/§6.7.2):
+//   - a buffer the master writes (SM0 mailbox, SM2 outputs): reading its first byte clears the
+//     "written" status and AL event bit 8+n; reading its last byte empties a mailbox (full flag
+//     off, "read" on, ECAT event for the master: it may write again);
+//   - a buffer the master reads (SM1 mailbox, SM3 inputs): writing its first byte clears the
+//     "read" status and AL event bit 8+n; writing its last byte hands it to the master (mailbox
+//     full; buffered: the newest of the three buffers). A full mailbox refuses PDI writes.
+//   A SyncManager that is disabled or deactivated takes no PDI buffer access either.
+#include <algorithm>
+#include <cstring>
+
+#include "base/little_endian.hpp"
+#include "ecat/esc/esc.hpp"
+#include "ecat/registers.hpp"
+
+namespace rackcat::ecat {
+
+namespace {
+
+using reg::sm::ecat_writes;
+using reg::sm::is_mailbox;
+using reg::sm::kStatusFull;
+using reg::sm::kStatusNoBuffer;
+using reg::sm::kStatusRead;
+using reg::sm::kStatusWritten;
+
+constexpr bool overlaps(uint32_t address, uint32_t len, uint32_t reg_address, uint32_t reg_len) {
+  return address < reg_address + reg_len && reg_address < address + len;
+}
+
+// PDI-writable bits of the register block (ESC datasheet "PDI access" column).
+constexpr uint8_t pdi_write_mask(uint16_t a) {
+  if (a == reg::kAlStatus) return 0x1F;  // state bits 3..0, error flag bit 4
+  if (a == reg::kAlStatusCode || a == reg::kAlStatusCode + 1) return 0xFF;
+  if (a >= reg::kAlEventMask && a < reg::kAlEventMask + 4) return 0xFF;
+  if (a >= reg::kSm && a < reg::kSm + reg::kSmSize * 16 &&
+      (a & 7) == reg::kSmPdiControlOffset) {
+    return reg::sm::kPdiDeactivate | reg::sm::kRepeatAck;
+  }
+  if (a >= 0x0F80 && a < reg::kProcessRam) return 0xFF;  // user RAM
+  return 0x00;
+}
+
+}  // namespace
+
+bool Esc::pdi_irq() const {
+  return (le::get32(&mem_[reg::kAlEventRequest]) & le::get32(&mem_[reg::kAlEventMask])) != 0;
+}
+
+void Esc::pdi_read(uint16_t address, uint8_t* dst, uint16_t len) {
+  len = static_cast<uint16_t>(std::min<uint32_t>(len, reg::kAddressSpace - address));
+  if (len == 0) return;
+  std::memcpy(dst, &mem_[address], len);
+  if (address < reg::kProcessRam) pdi_registers_read(address, len);
+  pdi_buffer_read_done(address, len);
+}
+
+void Esc::pdi_write(uint16_t address, const uint8_t* src, uint16_t len) {
+  len = static_cast<uint16_t>(std::min<uint32_t>(len, reg::kAddressSpace - address));
+  if (len == 0) return;
+  if (address < reg::kProcessRam) {
+    const uint16_t n = static_cast<uint16_t>(std::min<uint32_t>(address + len, reg::kProcessRam) -
+                                             address);
+    for (uint16_t i = 0; i < n; ++i) {
+      const auto a = static_cast<uint16_t>(address + i);
+      const uint8_t mask = pdi_write_mask(a);
+      mem_[a] = static_cast<uint8_t>((mem_[a] & ~mask) | (src[i] & mask));
+    }
+    pdi_registers_written(address, src, n);
+    if (n == len) return;
+    address = static_cast<uint16_t>(address + n);
+    src += n;
+    len = static_cast<uint16_t>(len - n);
+  }
+  pdi_buffer_write(address, src, len);
+}
+
+void Esc::pdi_registers_read(uint16_t address, uint16_t len) {
+  uint32_t events = le::get32(&mem_[reg::kAlEventRequest]);
+  if (overlaps(address, len, reg::kAlControl, 2)) events &= ~0x01u;
+  if (overlaps(address, len, reg::kWatchdogStatusProcessData, 2)) events &= ~0x40u;
+  if (overlaps(address, len, reg::kDcSync0Status, 1)) {
+    events &= ~0x04u;
+    mem_[reg::kDcSync0Status] &= static_cast<uint8_t>(~0x01);
+  }
+  if (overlaps(address, len, reg::kDcSync1Status, 1)) {
+    events &= ~0x08u;
+    mem_[reg::kDcSync1Status] &= static_cast<uint8_t>(~0x01);
+  }
+  if (overlaps(address, len, reg::kSm, reg::kSmSize * kSyncManagers)) {
+    for (int n = 0; n < kSyncManagers; ++n) {
+      if (overlaps(address, len, reg::sm::base(n) + reg::kSmActivateOffset, 1)) events &= ~0x10u;
+    }
+  }
+  le::put32(&mem_[reg::kAlEventRequest], events);
+}
+
+void Esc::pdi_registers_written(uint16_t address, const uint8_t* /*src*/, uint16_t len) {
+  if (overlaps(address, len, reg::kAlStatus, 2)) {
+    // AL status event for the master (ECAT event request 0x0210 bit 3), cleared when the
+    // master reads 0x0130 (register_map.cpp).
+    le::put16(&mem_[reg::kEcatEventRequest], le::get16(&mem_[reg::kEcatEventRequest]) | 0x0008);
+  }
+  if (overlaps(address, len, reg::kSm, reg::kSmSize * kSyncManagers)) {
+    for (int n = 0; n < kSyncManagers; ++n) {
+      if (overlaps(address, len, reg::sm::base(n) + reg::kSmPdiControlOffset, 1)) reload_sm(n);
+    }
+  }
+}
+
+void Esc::pdi_buffer_read_done(uint16_t address, uint16_t len) {
+  if (sm_enabled_mask_ == 0) return;
+  const uint32_t end = static_cast<uint32_t>(address) + len;
+  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
+    const int n = __builtin_ctz(mask);
+    const SmState& s = sm_[n];
+    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
+    if (!s.active || !ecat_writes(s.control) || !(address < s_end && s.start < end)) continue;
+    uint8_t& status = mem_[reg::sm::base(n) + reg::kSmStatusOffset];
+    if (address <= s.start) status = static_cast<uint8_t>(status & ~kStatusWritten);
+    if (end >= s_end && is_mailbox(s.control)) {
+      status = static_cast<uint8_t>((status & ~(kStatusFull | kStatusWritten)) | kStatusRead);
+    }
+    update_ecat_event(n);
+    update_al_event(n);
+  }
+}
+
+bool Esc::pdi_buffer_write(uint16_t address, const uint8_t* src, uint16_t len) {
+  const uint32_t end = static_cast<uint32_t>(address) + len;
+  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
+    const int n = __builtin_ctz(mask);
+    const SmState& s = sm_[n];
+    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
+    if (!(address < s_end && s.start < end)) continue;
+    if (!s.active || ecat_writes(s.control)) return false;
+    if (is_mailbox(s.control) &&
+        (mem_[reg::sm::base(n) + reg::kSmStatusOffset] & kStatusFull) != 0) {
+      return false;  // the master has not read the last message yet
+    }
+  }
+  std::memcpy(&mem_[address], src, len);
+  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
+    const int n = __builtin_ctz(mask);
+    SmState& s = sm_[n];
+    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
+    if (!(address < s_end && s.start < end)) continue;
+    uint8_t& status = mem_[reg::sm::base(n) + reg::kSmStatusOffset];
+    if (address <= s.start) status = static_cast<uint8_t>(status & ~kStatusRead);
+    if (end >= s_end) {
+      if (is_mailbox(s.control)) {
+        status = static_cast<uint8_t>(status | kStatusFull | kStatusWritten);
+      } else {
+        status = static_cast<uint8_t>((status & ~kStatusNoBuffer) | (s.next_buffer << 4) |
+                                      kStatusWritten);
+        s.next_buffer = static_cast<uint8_t>((s.next_buffer + 1) % 3);
+      }
+    }
+    update_ecat_event(n);
+    update_al_event(n);
+  }
+  return true;
+}
+
+}  // namespace rackcat::ecat

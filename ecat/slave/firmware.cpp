@@ -1,0 +1,101 @@
+// The firmware's main loop: power-on and one pass over the chip's AL events (ETG.1000.4 §6.5
+// "AL event request 0x0220"), in the order a microcontroller's ISR takes them.
+#include "ecat/slave/firmware.hpp"
+
+#include "ecat/registers.hpp"
+
+namespace rackcat::ecat {
+
+namespace {
+
+// AL event request 0x0220 / mask 0x0204 bits (ESC datasheet section II, 0x0220).
+constexpr uint32_t kEventAlControl = 0x0001;
+constexpr uint32_t kEventSync0 = 0x0004;
+constexpr uint32_t kEventSync1 = 0x0008;
+constexpr uint32_t kEventSmActivation = 0x0010;
+constexpr uint32_t kEventWatchdog = 0x0040;
+constexpr uint32_t kEventSm0 = 0x0100;
+constexpr uint32_t kEventSm2 = 0x0400;
+constexpr uint32_t kEventSm3 = 0x0800;
+// The events the firmware takes: AL control, SYNC0/1, SM activation, watchdog, SM0-SM3.
+constexpr uint32_t kEventMask = kEventAlControl | kEventSync0 | kEventSync1 |
+                                kEventSmActivation | kEventWatchdog | 0x0F00;
+
+}  // namespace
+
+Firmware::Firmware(PdiPort& pdi, Application& app) : pdi_(pdi), app_(app), mailbox_(pdi) {
+  app_.add_mailbox_protocols(mailbox_);
+  power_on();
+}
+
+void Firmware::power_on() {
+  const EsmState previous = state_;
+  pdi_.write32(reg::kAlEventMask, kEventMask);
+  for (int n = 0; n < 16; ++n) set_sm_deactivated(n, true);
+  mailbox_.stop();
+  state_ = EsmState::Init;
+  error_ = false;
+  code_ = 0;
+  dc_synchronised_ = false;
+  sm_taken_ = {};
+  read_sms();
+  esm_write_status();
+  if (previous != EsmState::Init) {
+    app_.on_state_changed(previous, EsmState::Init);
+    if (observer_ != nullptr) observer_->on_transition(previous, EsmState::Init);
+  }
+}
+
+void Firmware::read_sms() {
+  // One read of SM0-SM3 (0x0800-0x081F); reading the activation bytes clears AL event bit 4.
+  uint8_t regs[4 * reg::kSmSize];
+  pdi_.read(reg::kSm, regs);
+  for (int n = 0; n < 4; ++n) {
+    const uint8_t* r = &regs[n * reg::kSmSize];
+    Sm& s = sm_[n];
+    s.start = le::get16(r);
+    s.length = le::get16(r + 2);
+    s.control = r[reg::kSmControlOffset];
+    s.status = r[reg::kSmStatusOffset];
+    s.activate = r[reg::kSmActivateOffset];
+    s.enabled = (s.activate & reg::sm::kActivateEnable) && s.length != 0 &&
+                static_cast<uint32_t>(s.start) + s.length <= reg::kAddressSpace;
+  }
+}
+
+void Firmware::poll() {
+  const uint32_t events = pdi_.read32(reg::kAlEventRequest);
+  if (events & kEventAlControl) esm_control_written();
+  const bool activation = (events & kEventSmActivation) != 0;
+  if (activation) {
+    const std::array<Sm, 4> before = sm_;
+    read_sms();
+    esm_sm_changed(before);
+  }
+  if (events & kEventWatchdog) pd_watchdog();
+  if (events & kEventSync0) pd_sync(0);
+  if (events & kEventSync1) pd_sync(1);
+  if (state_ == EsmState::SafeOp || state_ == EsmState::Op) {
+    // A SyncManager configured without AL event (control bit 5) is polled by its status.
+    const bool sm2 = (events & kEventSm2) ||
+                     (sm_taken_[2].enabled && !(sm_taken_[2].control & reg::sm::kControlAlEvent) &&
+                      (pdi_.read8(reg::sm::base(2) + reg::kSmStatusOffset) & reg::sm::kStatusWritten));
+    const bool sm3 = (events & kEventSm3) != 0;
+    if (sm2) pd_outputs_written();
+    if (sm2 || sm3) pd_produce_inputs();
+    if (dc_synchronised_ && !sync0_active()) {
+      // The device follows SYNC0; without it the slave cannot keep its cycle (ETG.1000.6
+      // Table 11, 0x002C).
+      dc_synchronised_ = false;
+      esm_error(EsmState::SafeOp, 0x002C, EsmState::SafeOp);
+    }
+  }
+  if (mailbox_.running()) {
+    const bool sm0 = (events & kEventSm0) ||
+                     (!(sm_taken_[0].control & reg::sm::kControlAlEvent) &&
+                      (pdi_.read8(reg::sm::base(0) + reg::kSmStatusOffset) & reg::sm::kStatusFull));
+    mailbox_.service(state_, sm0, activation);
+  }
+}
+
+}  // namespace rackcat::ecat

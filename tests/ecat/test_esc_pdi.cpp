@@ -1,0 +1,187 @@
+// The chip alone, no firmware: what the ESC's PDI side does (ETG.1000.4 §6.5, §6.7; ESC
+// datasheet "PDI access" and 0x0220): AL event requests and the IRQ line, the reads that
+// clear them, PDI-writable registers, and the SyncManager hand-over between the EtherCAT side
+// (datagrams) and the PDI side (pdi_read / pdi_write).
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "base/little_endian.hpp"
+#include "ecat/esc/esc.hpp"
+#include "ecat/frame.hpp"
+#include "tests/ecat/test_application.hpp"
+
+namespace rackcat::ecat::test {
+namespace {
+
+struct Eeprom final : SiiEeprom {
+  std::span<const uint8_t> image() const override { return sii; }
+  std::vector<uint8_t> sii = make_test_sii();
+};
+
+struct ChipTest : ::testing::Test {
+  ChipTest() : esc(eeprom, clock) {}
+
+  // One datagram through the ESC as the master sends it; returns {data, wkc}.
+  std::pair<std::vector<uint8_t>, uint16_t> datagram(Command cmd, uint16_t adp, uint16_t ado,
+                                                     std::vector<uint8_t> data) {
+    std::vector<uint8_t> d(kDatagramHeaderSize + data.size() + kWorkingCounterSize, 0);
+    d[0] = static_cast<uint8_t>(cmd);
+    le::put16(&d[2], adp);
+    le::put16(&d[4], ado);
+    le::put16(&d[6], static_cast<uint16_t>(data.size()));
+    std::copy(data.begin(), data.end(), d.begin() + kDatagramHeaderSize);
+    esc.begin_frame({clock.now_ns(), clock.now_ns()});
+    esc.process_datagram(d.data(), static_cast<uint16_t>(data.size()));
+    return {std::vector<uint8_t>(d.begin() + kDatagramHeaderSize, d.end() - 2),
+            le::get16(&d[d.size() - 2])};
+  }
+  uint16_t apwr(uint16_t ado, std::vector<uint8_t> data) {
+    return datagram(Command::Apwr, 0, ado, std::move(data)).second;
+  }
+  std::pair<std::vector<uint8_t>, uint16_t> aprd(uint16_t ado, uint16_t len) {
+    return datagram(Command::Aprd, 0, ado, std::vector<uint8_t>(len, 0));
+  }
+  uint32_t al_events() const { return esc.read32(0x0220); }
+  uint8_t pdi8(uint16_t a) {
+    uint8_t v = 0;
+    esc.pdi_read(a, &v, 1);
+    return v;
+  }
+  void pdi_write8(uint16_t a, uint8_t v) { esc.pdi_write(a, &v, 1); }
+  // SM n configured and enabled by the master; the PDI activates it (0x0807 bit 0 = 0).
+  void sm(int n, uint16_t start, uint16_t len, uint8_t control) {
+    std::vector<uint8_t> r(8, 0);
+    le::put16(&r[0], start);
+    le::put16(&r[2], len);
+    r[4] = control;
+    r[6] = 0x01;
+    apwr(static_cast<uint16_t>(0x0800 + 8 * n), r);
+    pdi_write8(static_cast<uint16_t>(0x0807 + 8 * n), 0x00);
+  }
+
+  ManualClock clock;
+  Eeprom eeprom;
+  Esc esc;
+};
+
+TEST_F(ChipTest, ResetStateIsInitWithEverySmDeactivatedForThePdi) {
+  EXPECT_EQ(esc.al_status(), 0x01);
+  for (int n = 0; n < 16; ++n) EXPECT_EQ(esc.read8(0x0807 + 8 * n) & 0x01, 0x01);
+  EXPECT_TRUE(esc.take_reset());
+  EXPECT_FALSE(esc.take_reset());
+}
+
+TEST_F(ChipTest, AlControlRaisesAnEventThePdiReadClears) {
+  EXPECT_FALSE(esc.pdi_irq());
+  esc.pdi_write(0x0204, std::vector<uint8_t>{0x01, 0, 0, 0}.data(), 4);
+  apwr(0x0120, {0x02});
+  EXPECT_EQ(al_events() & 0x01, 0x01u);
+  EXPECT_TRUE(esc.pdi_irq());
+  // The chip does not change state by itself: AL status stays what the PDI wrote.
+  EXPECT_EQ(esc.al_status(), 0x01);
+  EXPECT_EQ(pdi8(0x0120), 0x02);
+  EXPECT_EQ(al_events() & 0x01, 0x00u);
+  EXPECT_FALSE(esc.pdi_irq());
+}
+
+TEST_F(ChipTest, PdiWritesOnlyItsRegisters) {
+  esc.pdi_write(0x0130, std::vector<uint8_t>{0x12, 0x00}.data(), 2);
+  esc.pdi_write(0x0134, std::vector<uint8_t>{0x1D, 0x00}.data(), 2);
+  EXPECT_EQ(esc.read16(0x0130), 0x0012);
+  EXPECT_EQ(esc.read16(0x0134), 0x001D);
+  EXPECT_EQ(esc.read16(0x0210) & 0x0008, 0x0008);  // AL status event for the master
+  pdi_write8(0x0010, 0x55);                         // station address: ECAT only
+  pdi_write8(0x0120, 0x08);                         // AL control: ECAT only
+  EXPECT_EQ(esc.read8(0x0010), 0x00);
+  EXPECT_EQ(esc.read8(0x0120), 0x01);
+  const auto r = aprd(0x0130, 2);  // the master reads AL status: event cleared
+  EXPECT_EQ(r.first[0], 0x12);
+  EXPECT_EQ(esc.read16(0x0210) & 0x0008, 0x0000);
+}
+
+TEST_F(ChipTest, PdiDeactivatedSmBlocksTheMaster) {
+  sm(0, 0x1000, 16, 0x26);
+  EXPECT_EQ(apwr(0x1000, std::vector<uint8_t>(16, 1)), 1);
+  pdi8(0x1000);
+  esc.pdi_read(0x1000, std::vector<uint8_t>(16).data(), 16);  // free it again
+  pdi_write8(0x0807, 0x01);
+  EXPECT_EQ(apwr(0x1000, std::vector<uint8_t>(16, 1)), 0);
+}
+
+TEST_F(ChipTest, MailboxWrittenByTheMasterIsReadAndFreedByThePdi) {
+  sm(0, 0x1000, 16, 0x26);  // mailbox, ECAT writes, AL event enabled
+  std::vector<uint8_t> msg(16, 0xA5);
+  EXPECT_EQ(apwr(0x1000, msg), 1);
+  EXPECT_EQ(al_events() & 0x0100, 0x0100u);  // SM0 event for the firmware
+  EXPECT_EQ(esc.read8(0x0805) & 0x08, 0x08);  // full
+  EXPECT_EQ(apwr(0x1000, msg), 0);            // a full mailbox refuses the master
+  std::vector<uint8_t> got(16, 0);
+  esc.pdi_read(0x1000, got.data(), 8);  // first byte: event cleared, still full
+  EXPECT_EQ(al_events() & 0x0100, 0x0000u);
+  EXPECT_EQ(esc.read8(0x0805) & 0x08, 0x08);
+  esc.pdi_read(0x1008, got.data() + 8, 8);  // last byte: empty again
+  EXPECT_EQ(got, msg);
+  EXPECT_EQ(esc.read8(0x0805) & 0x08, 0x00);
+  EXPECT_EQ(apwr(0x1000, msg), 1);
+}
+
+TEST_F(ChipTest, MailboxWrittenByThePdiIsHandedOverOnItsLastByte) {
+  sm(1, 0x1080, 16, 0x22);  // mailbox, ECAT reads
+  EXPECT_EQ(aprd(0x1080, 16).second, 0);  // empty: no data for the master
+  std::vector<uint8_t> msg(16, 0x3C);
+  esc.pdi_write(0x1080, msg.data(), 15);
+  EXPECT_EQ(esc.read8(0x080D) & 0x08, 0x00);  // not yet
+  esc.pdi_write(0x108F, msg.data() + 15, 1);
+  EXPECT_EQ(esc.read8(0x080D) & 0x08, 0x08);
+  std::vector<uint8_t> other(16, 0x11);
+  esc.pdi_write(0x1080, other.data(), 16);  // full: the PDI write is refused
+  const auto r = aprd(0x1080, 16);
+  EXPECT_EQ(r.second, 1);
+  EXPECT_EQ(r.first, msg);
+  EXPECT_EQ(al_events() & 0x0200, 0x0200u);  // read by the master: SM1 event
+  esc.pdi_write(0x1080, other.data(), 1);     // first byte clears it
+  EXPECT_EQ(al_events() & 0x0200, 0x0000u);
+}
+
+TEST_F(ChipTest, BufferedInputsWrittenByThePdiAreWhatTheMasterReads) {
+  sm(3, 0x1180, 6, 0x20);
+  const std::vector<uint8_t> in{1, 2, 3, 4, 5, 6};
+  esc.pdi_write(0x1180, in.data(), 6);
+  EXPECT_EQ(esc.read8(0x081D) & 0x01, 0x01);  // buffer written
+  EXPECT_EQ(aprd(0x1180, 6).first, in);
+  EXPECT_EQ(aprd(0x1180, 6).first, in);  // buffered: readable again, no empty state
+}
+
+TEST_F(ChipTest, SmActivationChangeRaisesAnEventTheActivationReadClears) {
+  sm(1, 0x1080, 16, 0x22);
+  pdi8(0x080E);
+  EXPECT_EQ(al_events() & 0x10, 0x00u);
+  apwr(0x080E, {0x03});  // the master toggles the repeat request
+  EXPECT_EQ(al_events() & 0x10, 0x10u);
+  pdi8(0x080E);
+  EXPECT_EQ(al_events() & 0x10, 0x00u);
+}
+
+TEST_F(ChipTest, Sync0RaisesAnEventTheStatusReadClears) {
+  esc.fire_sync(0, 1234);
+  EXPECT_EQ(al_events() & 0x04, 0x04u);
+  EXPECT_EQ(pdi8(0x098E) & 0x01, 0x01);
+  EXPECT_EQ(al_events() & 0x04, 0x00u);
+  EXPECT_EQ(esc.read8(0x098E) & 0x01, 0x00);
+}
+
+TEST_F(ChipTest, WatchdogExpiryIsAnEventNotAStateChange) {
+  sm(2, 0x1100, 4, 0x64);
+  apwr(0x1100, {1, 2, 3, 4});  // triggers the watchdog
+  clock.advance(200'000'000);
+  esc.service(clock.now_ns());
+  EXPECT_EQ(esc.read8(0x0440) & 0x01, 0x00);
+  EXPECT_EQ(al_events() & 0x40, 0x40u);
+  EXPECT_EQ(esc.al_status(), 0x01);  // the firmware decides what follows
+  pdi8(0x0440);
+  EXPECT_EQ(al_events() & 0x40, 0x00u);
+}
+
+}  // namespace
+}  // namespace rackcat::ecat::test
