@@ -21,6 +21,8 @@ namespace rackcat::device {
 
 class GenericDevice final : public ecat::Application {
  public:
+  // The CoE protocol add_mailbox_protocols() registers (unit tests drive it directly).
+  ecat::MailboxProtocol& coe_mailbox() { return coe_mailbox_; }
   explicit GenericDevice(EsiDevice esi);
 
   const EsiDevice& esi() const { return esi_; }

@@ -10,17 +10,17 @@
 namespace rackcat::modules {
 namespace {
 
-const char* esm_text(coe::EsmState s) {
+const char* esm_text(EsmState s) {
   switch (s) {
-    case coe::EsmState::Init:
+    case EsmState::Init:
       return "INIT";
-    case coe::EsmState::PreOp:
+    case EsmState::PreOp:
       return "PREOP";
-    case coe::EsmState::Boot:
+    case EsmState::Boot:
       return "BOOT";
-    case coe::EsmState::SafeOp:
+    case EsmState::SafeOp:
       return "SAFEOP";
-    case coe::EsmState::Op:
+    case EsmState::Op:
       return "OP";
   }
   return "?";
@@ -123,7 +123,7 @@ std::string LiveSnapshot::to_json() const {
               {"product_code", fmt::format("0x{:08X}", l.product_code)},
               {"revision", fmt::format("0x{:08X}", l.revision)}};
     if (!s.rack) {
-      link["esm"] = esm_text(static_cast<coe::EsmState>(l.al_status & 0x0F));
+      link["esm"] = esm_text(static_cast<EsmState>(l.al_status & 0x0F));
       slaves.push_back(std::move(link));
       continue;
     }

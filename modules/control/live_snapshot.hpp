@@ -61,7 +61,7 @@ class LiveSnapshot {
   struct Slave {
     bool rack = false;
     SlaveLink link;
-    coe::EsmState esm = coe::EsmState::Init;
+    EsmState esm = EsmState::Init;
     bool outputs_valid = false;
     double cpu_fan_rpm = 0, cpu_temperature = 0;
     uint32_t summary_active = 0, summary_latched = 0, device_event_status = 0;

@@ -28,21 +28,21 @@ constexpr uint8_t kSdoInfo = 0x08;  // CoE service (ETG.1000.6 Table 29)
 
 // One mailbox request to `app` and every fragment of its answer, the mailbox header's counter
 // (byte 5 bits 4..6) cleared so two devices' answers compare.
-Bytes ask(ecat::Application& app, const Bytes& request) {
+Bytes ask(ecat::MailboxProtocol& coe, const Bytes& request) {
   Bytes all;
   std::vector<uint8_t> reply(1486);
-  size_t n = app.on_mailbox(request, reply);
+  size_t n = coe.on_request(request, reply, EsmState::PreOp);
   while (n > 0) {
     reply[5] = static_cast<uint8_t>(reply[5] & 0x8F);
     all.insert(all.end(), reply.begin(), reply.begin() + static_cast<long>(n));
-    n = app.poll_mailbox(reply);
+    n = coe.poll(reply);
   }
   return all;
 }
 
 void to_preop(ecat::Application& app) {
-  ASSERT_EQ(app.on_state_request(ecat::AlState::Init, ecat::AlState::PreOp), 0);
-  app.on_state_changed(ecat::AlState::Init, ecat::AlState::PreOp);
+  ASSERT_EQ(app.on_state_request(EsmState::Init, EsmState::PreOp), 0);
+  app.on_state_changed(EsmState::Init, EsmState::PreOp);
 }
 
 class RoundTripTest : public ::testing::Test {
@@ -84,8 +84,8 @@ void round_trip(const mdp::RackConfig& config, const std::string& state_dir) {
   auto next = [&] { return counter = static_cast<uint8_t>(counter % 7 + 1); };
   // Get OD List, all objects (list type 1).
   const Bytes list_req = coe_message(next(), kSdoInfo, {0x01, 0x00, 0x00, 0x00, 0x01, 0x00});
-  const Bytes list = ask(native, list_req);
-  ASSERT_EQ(list, ask(copy, list_req));
+  const Bytes list = ask(native.coe_mailbox(), list_req);
+  ASSERT_EQ(list, ask(copy.coe_mailbox(), list_req));
   ASSERT_GT(list.size(), 16u);
   // The indices of the list: after each fragment's 8-byte mailbox + 2-byte CoE + 4-byte info
   // header (+ 2 bytes list type in the first).
@@ -103,8 +103,8 @@ void round_trip(const mdp::RackConfig& config, const std::string& state_dir) {
     const Bytes od_req = coe_message(
         next(), kSdoInfo,
         {0x03, 0x00, 0x00, 0x00, static_cast<uint8_t>(index), static_cast<uint8_t>(index >> 8)});
-    const Bytes od = ask(native, od_req);
-    ASSERT_EQ(od, ask(copy, od_req)) << "object description 0x" << std::hex << index;
+    const Bytes od = ask(native.coe_mailbox(), od_req);
+    ASSERT_EQ(od, ask(copy.coe_mailbox(), od_req)) << "object description 0x" << std::hex << index;
     // Max subindex: byte 8+2+4+2+2+1 = 19 of the answer.
     const uint8_t max_sub = od.size() > 19 ? od[19] : 0;
     for (int sub = 0; sub <= max_sub; ++sub) {
@@ -113,8 +113,8 @@ void round_trip(const mdp::RackConfig& config, const std::string& state_dir) {
             coe_message(next(), kSdoInfo,
                         {0x05, 0x00, 0x00, 0x00, static_cast<uint8_t>(index),
                          static_cast<uint8_t>(index >> 8), static_cast<uint8_t>(sub), info});
-        Bytes a = ask(native, e_req);
-        Bytes b = ask(copy, e_req);
+        Bytes a = ask(native.coe_mailbox(), e_req);
+        Bytes b = ask(copy.coe_mailbox(), e_req);
         const coe::Object* obj = copy_od.find(index);
         const coe::Object* native_obj = native_od.find(index);
         if (obj != nullptr && obj->code() == coe::ObjectCode::Array && sub >= 1 &&
