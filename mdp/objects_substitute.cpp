@@ -29,10 +29,10 @@ Object reaction_array(uint16_t index, const char* name, uint8_t channels, bool (
   }
   o.finalize();
   o.hooks.validate_write = [valid](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                   coe::EsmState) {
+                                   EsmState) {
     if (subindex == 0) return AbortCode::None;  // sub 0 is read-only; the SDO server says so
     if (subindex > 0) {
-      return data.size() >= 2 && valid(coe::get_le16(data.data())) ? AbortCode::None
+      return data.size() >= 2 && valid(le::get16(data.data())) ? AbortCode::None
                                                                    : AbortCode::ValueRange;
     }
     // Complete access: every entry of the candidate image.
@@ -40,7 +40,7 @@ Object reaction_array(uint16_t index, const char* name, uint8_t channels, bool (
       if (e.subindex == 0) continue;
       const size_t at = e.bit_offset / 8;
       if (at + 2 > data.size()) break;
-      if (!valid(coe::get_le16(&data[at]))) return AbortCode::ValueRange;
+      if (!valid(le::get16(&data[at]))) return AbortCode::ValueRange;
     }
     return AbortCode::None;
   };

@@ -159,7 +159,7 @@ TEST_F(RackSlaveTest, DeviceResetPutsTheNewFirmwareRevisionIntoTheSii) {
   std::array<uint8_t, 128> reply{};
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
   while (restarts == 0 && std::chrono::steady_clock::now() < deadline) {
-    slave.poll_mailbox(reply);
+    slave.coe_mailbox().poll(reply);
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   ASSERT_EQ(restarts, 1);

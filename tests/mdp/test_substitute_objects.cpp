@@ -15,7 +15,7 @@
 namespace rackcat::mdp {
 namespace {
 
-using coe::EsmState;
+using rackcat::EsmState;
 using testing::SdoClient;
 namespace sv = substitute;
 
