@@ -31,7 +31,7 @@ uint64_t value_of(const coe::Object& o, std::span<const uint8_t> image, uint8_t 
   if (!e) return 0;
   const size_t at = e->bit_offset / 8;
   if (at + e->byte_length() > image.size()) return o.get_u(sub);
-  return coe::get_le(image.data() + at, e->byte_length());
+  return le::get(image.data() + at, e->byte_length());
 }
 
 }  // namespace
@@ -74,7 +74,7 @@ Settings candidate_settings(const coe::Object& o, int subindex, std::span<const 
   if (subindex == -1) return read_settings(o, data);
   Settings s = read_settings(o);
   if (subindex < 1 || data.empty()) return s;
-  const uint64_t v = coe::get_le(data.data(), std::min<size_t>(data.size(), 8));
+  const uint64_t v = le::get(data.data(), std::min<size_t>(data.size(), 8));
   switch (subindex) {
     case kCodeSequence:
     case kClass4:

@@ -96,9 +96,9 @@ rims:
   coe::Object& settings = *device.dictionary().find(0x8000);
   settings.set_u(0x06, 100000);  // total range first (units x turns must cover it)
   settings.set_u(0x05, 1000);
-  device.state_changed(coe::EsmState::Init, coe::EsmState::PreOp);
-  device.state_changed(coe::EsmState::PreOp, coe::EsmState::SafeOp);
-  device.state_changed(coe::EsmState::SafeOp, coe::EsmState::Op);
+  device.state_changed(EsmState::Init, EsmState::PreOp);
+  device.state_changed(EsmState::PreOp, EsmState::SafeOp);
+  device.state_changed(EsmState::SafeOp, EsmState::Op);
   std::vector<uint8_t> sm2(device.output_bytes(), 0), sm3(device.input_bytes(), 0);
   uint8_t ls = 0;
   for (auto _ : state) {

@@ -64,7 +64,7 @@ void EncoderDriver::attach(mdp::Device& device) {
   auto inner = settings_->hooks.validate_write;
   settings_->hooks.validate_write = [this, inner](const coe::Object& obj, int subindex,
                                                   std::span<const uint8_t> data,
-                                                  coe::EsmState state) {
+                                                  EsmState state) {
     const coe::AbortCode rc = inner ? inner(obj, subindex, data, state) : coe::AbortCode::None;
     if (rc != coe::AbortCode::None) {
       report(text::kEncoderParameter, static_cast<uint16_t>(subindex > 0 ? subindex : 0));
@@ -73,7 +73,7 @@ void EncoderDriver::attach(mdp::Device& device) {
   };
   // Guide 3.11.7: "Class 4 functionality must be enabled!" for a preset.
   preset_->hooks.validate_write = [this](const coe::Object&, int subindex,
-                                         std::span<const uint8_t> data, coe::EsmState) {
+                                         std::span<const uint8_t> data, EsmState) {
     if (subindex != enc::kPresetCommand || data.empty() || data[0] == 0) {
       return coe::AbortCode::None;
     }

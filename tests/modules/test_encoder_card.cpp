@@ -45,8 +45,8 @@ class EncoderCard : public ::testing::Test {
   void cycle(uint16_t stw2, uint16_t stw) {
     clock += 0.001;
     std::vector<uint8_t> out(device.output_bytes(), 0);
-    coe::put_le16(out.data(), stw2);
-    coe::put_le16(out.data() + 2, stw);
+    le::put16(out.data(), stw2);
+    le::put16(out.data() + 2, stw);
     device.write_outputs(out);
     in.assign(device.input_bytes(), 0);
     device.read_inputs(in);
@@ -58,18 +58,18 @@ class EncoderCard : public ::testing::Test {
       cycle(static_cast<uint16_t>(ls << 12 | 1u << 10), stw);
     }
   }
-  uint16_t zsw2() const { return coe::get_le16(in.data()); }
-  uint16_t zsw() const { return coe::get_le16(in.data() + 2); }
-  uint32_t xist1() const { return coe::get_le32(in.data() + 4); }
-  uint32_t xist2() const { return coe::get_le32(in.data() + 8); }
-  int32_t nist_b() const { return static_cast<int32_t>(coe::get_le32(in.data() + 12)); }
+  uint16_t zsw2() const { return le::get16(in.data()); }
+  uint16_t zsw() const { return le::get16(in.data() + 2); }
+  uint32_t xist1() const { return le::get32(in.data() + 4); }
+  uint32_t xist2() const { return le::get32(in.data() + 8); }
+  int32_t nist_b() const { return static_cast<int32_t>(le::get32(in.data() + 12)); }
   coe::Object& settings() { return *device.dictionary().find(0x8000); }
   coe::Object& preset() { return *device.dictionary().find(0x8001); }
   EncoderDriver& encoder() { return *dynamic_cast<EncoderDriver*>(rack.driver(1)); }
   // An SDO download as the SDO server does it: check, commit, after_write.
   coe::AbortCode sdo(coe::Object& o, uint8_t sub, uint32_t value) {
     uint8_t b[4];
-    coe::put_le32(b, value);
+    le::put32(b, value);
     const std::span<const uint8_t> data(b, o.entry(sub)->byte_length());
     if (o.hooks.validate_write) {
       const auto rc = o.hooks.validate_write(o, sub, data, EsmState::PreOp);
@@ -251,8 +251,8 @@ TEST_F(EncoderCard, NothingAllocatesOnTheCyclicPath) {
     const uint16_t stw =
         static_cast<uint16_t>((i % 100 < 50 ? 1u << 12 : 0) | (i % 200 < 100 ? 1u << 11 : 0) |
                               (i % 500 == 499 ? 1u << 15 : 0));
-    coe::put_le16(out.data(), static_cast<uint16_t>(ls << 12 | 1u << 10));
-    coe::put_le16(out.data() + 2, stw);
+    le::put16(out.data(), static_cast<uint16_t>(ls << 12 | 1u << 10));
+    le::put16(out.data() + 2, stw);
     device.write_outputs(out);
     in.resize(device.input_bytes());
     device.read_inputs(in);
