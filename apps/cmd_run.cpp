@@ -176,8 +176,12 @@ int run(const RunArgs& a) {
   // 0xFBF0 device reset: the rack restarts its firmware too (back to INIT, no error).
   for (size_t r = 0; r < racks.size(); ++r) {
     const size_t i = rack_position[r];
-    racks[r]->set_restart_handler([&runner, &segment, i] {
-      runner.loop().post([&segment, i] { segment.slave(i).firmware().application_restart(); });
+    RackSlave* slave = racks[r].get();
+    racks[r]->set_restart_handler([&runner, &segment, i, slave] {
+      runner.loop().post([&segment, i, slave] {
+        slave->finish_device_reset();
+        segment.slave(i).firmware().application_restart();
+      });
     });
   }
 

@@ -62,6 +62,7 @@ size_t Segment::process(std::span<uint8_t> frame) {
   // administered), so a master can tell its own frame from the one the line returns.
   frame[6] |= 0x02;
   if (layout_.kind == FrameLayout::Kind::OtherType) return frame.size();
+  after_frame();
   const uint64_t t0 = clock_.now_ns();
   for (auto& s : slaves_) service_slave(*s, t0);
   uint8_t* base = frame.data();
@@ -73,11 +74,17 @@ size_t Segment::process(std::span<uint8_t> frame) {
       esc.process_datagram(base + layout_.offset[d], layout_.length[d]);
     }
     if (layout_.malformed) esc.count_frame_error();
-    // The frame has left this ESC: its firmware runs before the next frame arrives.
-    slave.run_firmware();
+    // The frame has left this ESC: its firmware runs in after_frame(), once the reply is out.
+    firmware_pending_ = k + 1;
     if (!esc.forwards_to_port1()) break;  // last slave, or loop closed by DL control
   }
   return frame.size();
+}
+
+void Segment::after_frame() {
+  const size_t n = firmware_pending_;
+  firmware_pending_ = 0;
+  for (size_t k = 0; k < n; ++k) slaves_[k]->run_firmware();
 }
 
 void Segment::service_slave(Slave& s, uint64_t now) {

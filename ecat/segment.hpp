@@ -7,6 +7,7 @@
 // Typical use by a link:
 //   rackcat::ecat::Segment segment({&device_a, &device_b});
 //   size_t n = segment.process(frame);            // in place; send frame[0..n) back, 0 = drop
+//   segment.after_frame();                        // once it is sent: the slaves' firmware runs
 //   timer at segment.next_event_ns(): segment.service();
 // Not thread-safe: process(), service() and every Esc/Application call belong to one thread
 // (the link's event loop); other threads post work to it.
@@ -99,6 +100,11 @@ class Segment {
   // defect are processed, the rest passes unchanged and every slave counts a frame error.
   // Allocates nothing. Fires due SYNC events and watchdogs first (see service()).
   size_t process(std::span<uint8_t> frame);
+  // The firmware of every slave the last frame passed runs here, after its reply has left
+  // (the event loop calls it once the frame is sent): a microcontroller works between frames,
+  // so a slow mailbox service (a device reset, a store) never delays the reply, which SOEM
+  // drops when it comes later than 2 ms. process() runs what a caller left pending first.
+  void after_frame();
 
   // Fires the SYNC events and watchdog expiries due now (clock time). Call at
   // next_event_ns(); process() calls it too.
@@ -119,6 +125,7 @@ class Segment {
   const Clock& clock_;
   SegmentOptions options_;
   std::vector<std::unique_ptr<Slave>> slaves_;
+  size_t firmware_pending_ = 0;  // slaves 0..n-1 of the last frame, firmware not run yet
   std::vector<PassTimes> offsets_;  // per slave, relative to the frame's arrival at slave 0
   FrameLayout layout_;
 };

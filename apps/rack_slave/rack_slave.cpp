@@ -34,6 +34,14 @@ RackSlave::~RackSlave() {
 }
 
 void RackSlave::device_reset() {
+  // Only marks the work: the SII image is rebuilt by finish_device_reset(), outside the frame.
+  sii_stale_ = true;
+  restart_pending_ = true;
+}
+
+void RackSlave::finish_device_reset() {
+  if (!sii_stale_) return;
+  sii_stale_ = false;
   // Rebuilt in place when the size is unchanged, so a view of the image stays valid.
   std::vector<uint8_t> image = esi::build_sii(*device_).bytes;
   if (image.size() == sii_.size()) {
@@ -41,7 +49,6 @@ void RackSlave::device_reset() {
   } else {
     sii_ = std::move(image);
   }
-  restart_pending_ = true;
 }
 
 uint16_t RackSlave::on_state_request(EsmState from, EsmState to) {

@@ -36,6 +36,11 @@ class RackSlave final : public ecat::Application {
   // the master has read the answer: the owner restarts the ESC's application side
   // (ecat::Firmware::application_restart).
   void set_restart_handler(std::function<void()> fn) { restart_ = std::move(fn); }
+  // The owner calls this after the current frame, before it restarts the firmware: the SII
+  // image follows the firmware that runs now (its revision, SII word 0x0C). Building it takes
+  // milliseconds, so it must not run inside a frame: SOEM drops a reply later than 2 ms and a
+  // lost answer to the 0xFBF0 write would never be repeated after the restart.
+  void finish_device_reset();
   modules::Rack& rack() { return *rack_; }
   // The mailbox protocols add_mailbox_protocols() registers (unit tests drive them directly).
   ecat::MailboxProtocol& coe_mailbox() { return coe_mailbox_; }
@@ -75,6 +80,7 @@ class RackSlave final : public ecat::Application {
   FoeMailbox foe_mailbox_{*this};
   std::function<void()> restart_;
   bool restart_pending_ = false;
+  bool sii_stale_ = false;  // 0xFBF0 ran; finish_device_reset() rebuilds the SII image
 
   // Hears the device reset command (0xFBF0) among the device's listeners.
   struct ResetListener final : mdp::CycleListener {
@@ -83,8 +89,8 @@ class RackSlave final : public ecat::Application {
     RackSlave& slave;
   };
   ResetListener reset_listener_{*this};
-  // 0xFBF0 ran: the SII image follows the firmware that runs now (its revision, SII word 0x0C),
-  // and the ESC side restarts once the answer is read.
+  // 0xFBF0 ran: the ESC side restarts once the answer is read (finish_device_reset() then
+  // rebuilds the SII image, outside the frame).
   void device_reset();
 };
 

@@ -141,6 +141,7 @@ int main(int argc, char** argv) {
         process_ns.push_back(static_cast<uint32_t>(t1 - t0));
         send_ns.push_back(static_cast<uint32_t>(t2 - t1));
       }
+      if (!echo) segment.after_frame();  // the firmware, once the reply is out (as EventLoop)
       deadline = segment.next_event_ns();
     }
     if (now_ns() >= deadline) {

@@ -115,10 +115,12 @@ void EventLoop::handle_frame(std::span<uint8_t> frame) {
   if (options_.pcap != nullptr) options_.pcap->write(frame);
   if (!on_frame_) return;
   const size_t reply = on_frame_(frame);
-  if (reply == 0 || reply > frame.size()) return;
-  const auto out = frame.first(reply);
-  link_.send(out);
-  if (options_.pcap != nullptr) options_.pcap->write(out);
+  if (reply != 0 && reply <= frame.size()) {
+    const auto out = frame.first(reply);
+    link_.send(out);
+    if (options_.pcap != nullptr) options_.pcap->write(out);
+  }
+  if (after_frame_) after_frame_();
 }
 
 void EventLoop::fire_timers(uint64_t now) {

@@ -77,6 +77,8 @@ class EventLoop {
   EventLoop& operator=(const EventLoop&) = delete;
 
   void set_frame_handler(FrameHandler handler) { on_frame_ = std::move(handler); }
+  // Runs after each frame's reply has been sent (the slaves' firmware: Segment::after_frame).
+  void set_after_frame_handler(std::function<void()> handler) { after_frame_ = std::move(handler); }
   void set_timer_source(TimerSource* source) { timers_ = source; }
 
   // Runs until stop() or SIGINT/SIGTERM. Returns 0 on a clean stop, 1 when the loop could
@@ -102,6 +104,7 @@ class EventLoop {
   RawSocketLink& link_;
   Options options_;
   FrameHandler on_frame_;
+  std::function<void()> after_frame_;
   TimerSource* timers_ = nullptr;
   int event_fd_ = -1;
   std::atomic<bool> stop_requested_{false};

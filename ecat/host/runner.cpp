@@ -62,9 +62,11 @@ int Runner::run(Segment& segment) {
   if (!loop_) return kExitFailure;
   SegmentTimers timers(segment);
   loop_->set_frame_handler([&segment](std::span<uint8_t> frame) { return segment.process(frame); });
+  loop_->set_after_frame_handler([&segment] { segment.after_frame(); });
   loop_->set_timer_source(&timers);
   const int rc = loop_->run();
   loop_->set_timer_source(nullptr);
+  loop_->set_after_frame_handler(nullptr);
   if (pcap_) pcap_->flush();
   return rc;
 }

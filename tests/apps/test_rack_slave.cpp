@@ -115,7 +115,10 @@ TEST_F(RackSlaveTest, StateChangesReachTheDevice) {
 TEST_F(RackSlaveTest, DeviceResetRestartsTheEscOnceTheAnswerIsRead) {
   RackSlave slave(default_rack(), dir_.string(), 0);
   int restarts = 0;
-  slave.set_restart_handler([&] { ++restarts; });
+  slave.set_restart_handler([&] {
+    slave.finish_device_reset();
+    ++restarts;
+  });
   to_preop(slave);
   mdp::testing::SdoClient sdo(slave.device());
   // 0xFBF0:01 device reset with its signature (docs/MDP.md command table).
@@ -151,7 +154,10 @@ TEST_F(RackSlaveTest, DeviceResetPutsTheNewFirmwareRevisionIntoTheSii) {
       .write(reinterpret_cast<const char*>(file->data()),
              static_cast<std::streamsize>(file->size()));
   int restarts = 0;
-  slave.set_restart_handler([&] { ++restarts; });
+  slave.set_restart_handler([&] {
+    slave.finish_device_reset();
+    ++restarts;
+  });
   to_preop(slave);
   mdp::testing::SdoClient sdo(slave.device());
   const std::vector<uint8_t> reset{0x74, 0x65, 0x73, 0x65, 0x72, 0x00};

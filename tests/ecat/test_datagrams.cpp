@@ -12,6 +12,7 @@ namespace {
 
 std::vector<uint8_t> run(Line& line, std::vector<uint8_t> frame) {
   const size_t n = line.segment->process(frame);
+  line.segment->after_frame();  // the firmware, once the reply is out
   EXPECT_EQ(n, frame.size());
   return frame;
 }

@@ -94,6 +94,7 @@ std::vector<Reply> decode(const std::vector<uint8_t>& f) {
 std::vector<Reply> TestMaster::send_frame(const FrameBuilder& frame) {
   std::vector<uint8_t> f = frame.build();
   const size_t n = segment_.process(f);
+  segment_.after_frame();  // the reply is back at the master; the firmware runs now
   if (n != f.size()) throw std::runtime_error("frame not returned at full length");
   return decode(f);
 }
