@@ -76,6 +76,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::memcpy(w.frame.data(), data + 1, n);
   const size_t reply = w.segment.process(std::span<uint8_t>(w.frame.data(), n));
   if (reply != 0 && reply != n) std::abort();  // a frame is answered at full length or not at all
+  w.segment.after_frame();  // the firmware, once the reply is out (as the event loop does)
   for (size_t k = 0; k < w.segment.size(); ++k) {
     // The AL status register always holds a valid state (ETG.1000.6 Table 9).
     const uint8_t state = w.segment.slave(k).esc().read8(0x0130) & 0x0F;
