@@ -76,11 +76,14 @@ void Firmware::poll() {
   if (events & kEventSync0) pd_sync(0);
   if (events & kEventSync1) pd_sync(1);
   if (state_ == EsmState::SafeOp || state_ == EsmState::Op) {
-    // A SyncManager configured without AL event (control bit 5) is polled by its status.
+    // A SyncManager configured without AL event (control bit 5) is polled by its status: SM2
+    // written by the master, SM3 read by it (ESI devices without mailbox, e.g. ControlByte 0x00).
     const bool sm2 = (events & kEventSm2) ||
                      (sm_taken_[2].enabled && !(sm_taken_[2].control & reg::sm::kControlAlEvent) &&
                       (pdi_.read8(reg::sm::base(2) + reg::kSmStatusOffset) & reg::sm::kStatusWritten));
-    const bool sm3 = (events & kEventSm3) != 0;
+    const bool sm3 = (events & kEventSm3) ||
+                     (sm_taken_[3].enabled && !(sm_taken_[3].control & reg::sm::kControlAlEvent) &&
+                      (pdi_.read8(reg::sm::base(3) + reg::kSmStatusOffset) & reg::sm::kStatusRead));
     if (sm2) pd_outputs_written();
     if (sm2 || sm3) pd_produce_inputs();
     if (dc_synchronised_ && !sync0_active()) {
