@@ -9,7 +9,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace rackcat::coe;
   if (size < 2) return 0;
   fuzz::Slave& s = fuzz::slave();
-  const EsmState state = fuzz::state_of(data[0]);
+  const rackcat::EsmState state = fuzz::state_of(data[0]);
   std::vector<uint8_t> reply(16 + data[1]);
   size_t pos = 2;
   while (pos < size) {

@@ -9,6 +9,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace rackcat::coe;
+  namespace le = rackcat::le;
   if (size < 1 || size > 200) return 0;
   fuzz::Slave& s = fuzz::slave();
   std::vector<uint8_t> reply(16 + data[0] % 120);
@@ -19,7 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   request[7] = 0x80;  // SDO Information
   std::copy(data + 1, data + size, request.begin() + 8);
 
-  size_t n = s.server.handle(request, reply, EsmState::PreOp);
+  size_t n = s.server.handle(request, reply, rackcat::EsmState::PreOp);
   fuzz::check_reply(reply, n);
   int expected_left = -1;
   while (n) {

@@ -14,6 +14,7 @@
 namespace {
 
 using namespace rackcat::ecat;
+using rackcat::EsmState;
 
 // A device that accepts everything and records nothing (state persists for millions of runs).
 class FuzzDevice final : public Application, public MailboxProtocol {
