@@ -165,12 +165,10 @@ int run(const RunArgs& a) {
   // the loop, after the current frame, like a local application error (ETG.1000.6 §5.3.3).
   for (size_t r = 0; r < racks.size(); ++r) {
     const size_t i = rack_position[r];
-    racks[r]->rack().set_state_request_handler(
-        [&runner, &segment, i](EsmState to, uint16_t code) {
-          runner.loop().post([&segment, i, to, code] {
-            segment.slave(i).firmware().application_error(to, code);
-          });
-        });
+    racks[r]->rack().set_state_request_handler([&runner, &segment, i](EsmState to, uint16_t code) {
+      runner.loop().post(
+          [&segment, i, to, code] { segment.slave(i).firmware().application_error(to, code); });
+    });
   }
 
   // 0xFBF0 device reset: the rack restarts its firmware too (back to INIT, no error).

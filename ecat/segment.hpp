@@ -125,7 +125,7 @@ class Segment {
   const Clock& clock_;
   SegmentOptions options_;
   std::vector<std::unique_ptr<Slave>> slaves_;
-  size_t firmware_pending_ = 0;  // slaves 0..n-1 of the last frame, firmware not run yet
+  size_t firmware_pending_ = 0;     // slaves 0..n-1 of the last frame, firmware not run yet
   std::vector<PassTimes> offsets_;  // per slave, relative to the frame's arrival at slave 0
   FrameLayout layout_;
 };

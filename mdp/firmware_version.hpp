@@ -11,8 +11,8 @@
 namespace rackcat::mdp {
 
 // Sets the power-on values (defaults; the device's object reset loads them) of 0x100A,
-// 0x1018:03 and 0x2000:02 from `cm`. 0x100A is a VISIBLE_STRING as long as its text: a version of another length replaces
-// the object (same name and access, no hooks on it).
+// 0x1018:03 and 0x2000:02 from `cm`. 0x100A is a VISIBLE_STRING as long as its text: a version of
+// another length replaces the object (same name and access, no hooks on it).
 void apply_firmware_version(coe::ObjectDictionary& od, const ControlModule& cm);
 
 }  // namespace rackcat::mdp

@@ -33,7 +33,7 @@ Object reaction_array(uint16_t index, const char* name, uint8_t channels, bool (
     if (subindex == 0) return AbortCode::None;  // sub 0 is read-only; the SDO server says so
     if (subindex > 0) {
       return data.size() >= 2 && valid(le::get16(data.data())) ? AbortCode::None
-                                                                   : AbortCode::ValueRange;
+                                                               : AbortCode::ValueRange;
     }
     // Complete access: every entry of the candidate image.
     for (const auto& e : obj.entries()) {

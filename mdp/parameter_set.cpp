@@ -124,7 +124,7 @@ std::string ParameterSet::check(std::span<const uint8_t> payload) const {
         std::copy_n(payload.begin() + static_cast<long>(end_at), value.size(), value.begin());
       } else {
         le::put(value.data(), std::min<size_t>(value.size(), 8),
-                    le::get(payload.data() + end_at, std::min<size_t>(r.bytes, 8)));
+                le::get(payload.data() + end_at, std::min<size_t>(r.bytes, 8)));
       }
       coe::copy_bits(candidate.data(), e.bit_offset, value.data(), 0, e.bit_length);
       end_at += r.bytes;

@@ -5,8 +5,8 @@
 #include <cstdlib>
 #include <limits>
 
-#include "ecat/esc/esc.hpp"
 #include "base/little_endian.hpp"
+#include "ecat/esc/esc.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {

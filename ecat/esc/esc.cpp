@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cstring>
 
-#include "ecat/frame.hpp"
 #include "base/little_endian.hpp"
+#include "ecat/frame.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {

@@ -137,9 +137,9 @@ class Esc {
     uint16_t start = 0;
     uint16_t length = 0;
     uint8_t control = 0;
-    bool enabled = false;         // ECAT activate bit (0x0806 bit 0) and a non-zero length
-    bool active = false;          // enabled and not deactivated by the PDI (0x0807 bit 0)
-    uint8_t next_buffer = 0;      // buffered mode: buffer index that receives the next write
+    bool enabled = false;     // ECAT activate bit (0x0806 bit 0) and a non-zero length
+    bool active = false;      // enabled and not deactivated by the PDI (0x0807 bit 0)
+    uint8_t next_buffer = 0;  // buffered mode: buffer index that receives the next write
   };
   struct FmmuState {
     uint32_t logical_start = 0;

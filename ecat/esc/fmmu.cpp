@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cstring>
 
+#include "base/little_endian.hpp"
 #include "ecat/esc/esc.hpp"
 #include "ecat/frame.hpp"
-#include "base/little_endian.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {

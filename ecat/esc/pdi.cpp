@@ -43,8 +43,7 @@ constexpr uint8_t pdi_write_mask(uint16_t a) {
   if (a == reg::kAlStatus) return 0x1F;  // state bits 3..0, error flag bit 4
   if (a == reg::kAlStatusCode || a == reg::kAlStatusCode + 1) return 0xFF;
   if (a >= reg::kAlEventMask && a < reg::kAlEventMask + 4) return 0xFF;
-  if (a >= reg::kSm && a < reg::kSm + reg::kSmSize * 16 &&
-      (a & 7) == reg::kSmPdiControlOffset) {
+  if (a >= reg::kSm && a < reg::kSm + reg::kSmSize * 16 && (a & 7) == reg::kSmPdiControlOffset) {
     return reg::sm::kPdiDeactivate | reg::sm::kRepeatAck;
   }
   if (a >= 0x0F80 && a < reg::kProcessRam) return 0xFF;  // user RAM
@@ -69,8 +68,8 @@ void Esc::pdi_write(uint16_t address, const uint8_t* src, uint16_t len) {
   len = static_cast<uint16_t>(std::min<uint32_t>(len, reg::kAddressSpace - address));
   if (len == 0) return;
   if (address < reg::kProcessRam) {
-    const uint16_t n = static_cast<uint16_t>(std::min<uint32_t>(address + len, reg::kProcessRam) -
-                                             address);
+    const uint16_t n =
+        static_cast<uint16_t>(std::min<uint32_t>(address + len, reg::kProcessRam) - address);
     for (uint16_t i = 0; i < n; ++i) {
       const auto a = static_cast<uint16_t>(address + i);
       const uint8_t mask = pdi_write_mask(a);

@@ -2,8 +2,8 @@
 // datasheet section II). Bytes not listed in the mask table are read-only for EtherCAT.
 #include <array>
 
-#include "ecat/esc/esc.hpp"
 #include "base/little_endian.hpp"
+#include "ecat/esc/esc.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cstring>
 
-#include "ecat/esc/esc.hpp"
 #include "base/little_endian.hpp"
+#include "ecat/esc/esc.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -100,7 +100,7 @@ void Esc::sii_command(uint8_t control_lo, uint8_t command, bool control_lo_writt
       sii_[byte_address] = mem_[reg::kSiiData];
       sii_[byte_address + 1] = mem_[reg::kSiiData + 1];
       eeprom_.on_write(static_cast<uint16_t>(byte_address / 2),
-                           std::span<const uint8_t>(&sii_[byte_address], 2));
+                       std::span<const uint8_t>(&sii_[byte_address], 2));
       break;
     }
     case kCmdReload: {

@@ -4,8 +4,8 @@
 // bits 4-11 for the master, AL event request 0x0220 bits 8-23 for the firmware. The PDI side
 // of the same buffers is in pdi.cpp.
 
-#include "ecat/esc/esc.hpp"
 #include "base/little_endian.hpp"
+#include "ecat/esc/esc.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {

@@ -2,8 +2,8 @@
 // completed write of a SyncManager with watchdog trigger enabled (SM2 in practice); on expiry
 // the status bit 0x0440.0 drops, the counter 0x0442 counts and AL event request bit 6 rises.
 // What follows (outputs to the safe state, OP -> SAFEOP with 0x001B) is the firmware's part.
-#include "ecat/esc/esc.hpp"
 #include "base/little_endian.hpp"
+#include "ecat/esc/esc.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {

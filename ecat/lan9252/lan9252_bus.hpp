@@ -27,11 +27,12 @@ inline constexpr uint16_t kByteTest = 0x0064;  // reads 0x87654321
 inline constexpr uint16_t kHwCfg = 0x0074;     // bit 27: device ready
 inline constexpr uint16_t kResetCtl = 0x01F8;
 inline constexpr uint16_t kCsrData = 0x0300;  // EtherCAT CSR interface data
-inline constexpr uint16_t kCsrCmd = 0x0304;   // ... command: busy 31, read 30, size 18:16, address 15:0
-inline constexpr uint16_t kPramReadAddrLen = 0x0308;   // length 31:16, address 15:0
-inline constexpr uint16_t kPramReadCmd = 0x030C;       // busy 31, abort 30, avail count 12:8, avail 0
+inline constexpr uint16_t kCsrCmd =
+    0x0304;  // ... command: busy 31, read 30, size 18:16, address 15:0
+inline constexpr uint16_t kPramReadAddrLen = 0x0308;  // length 31:16, address 15:0
+inline constexpr uint16_t kPramReadCmd = 0x030C;  // busy 31, abort 30, avail count 12:8, avail 0
 inline constexpr uint16_t kPramWriteAddrLen = 0x0310;  // length 31:16, address 15:0
-inline constexpr uint16_t kPramWriteCmd = 0x0314;      // busy 31, abort 30, space count 12:8, space 0
+inline constexpr uint16_t kPramWriteCmd = 0x0314;  // busy 31, abort 30, space count 12:8, space 0
 
 inline constexpr uint32_t kByteTestValue = 0x87654321;
 inline constexpr uint32_t kHwCfgReady = 1u << 27;

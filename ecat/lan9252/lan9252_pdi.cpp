@@ -44,8 +44,8 @@ bool Lan9252Pdi::start() {
 }
 
 void Lan9252Pdi::csr_read(uint16_t address, uint8_t* dst, uint8_t size) {
-  sys_write(lan9252::kCsrCmd, lan9252::kCsrBusy | lan9252::kCsrRead |
-                                  (static_cast<uint32_t>(size) << 16) | address);
+  sys_write(lan9252::kCsrCmd,
+            lan9252::kCsrBusy | lan9252::kCsrRead | (static_cast<uint32_t>(size) << 16) | address);
   while (sys_read(lan9252::kCsrCmd) & lan9252::kCsrBusy) {
   }
   uint8_t b[4];
@@ -114,7 +114,8 @@ void Lan9252Pdi::read(uint16_t address, std::span<uint8_t> dst) {
   uint32_t a = address;
   size_t i = 0;
   while (i < dst.size() && a < kProcessRam) {
-    const uint8_t n = csr_chunk(a, static_cast<uint32_t>(std::min<size_t>(dst.size() - i, kProcessRam - a)));
+    const uint8_t n =
+        csr_chunk(a, static_cast<uint32_t>(std::min<size_t>(dst.size() - i, kProcessRam - a)));
     csr_read(static_cast<uint16_t>(a), &dst[i], n);
     a += n;
     i += n;
@@ -128,7 +129,8 @@ void Lan9252Pdi::write(uint16_t address, std::span<const uint8_t> src) {
   uint32_t a = address;
   size_t i = 0;
   while (i < src.size() && a < kProcessRam) {
-    const uint8_t n = csr_chunk(a, static_cast<uint32_t>(std::min<size_t>(src.size() - i, kProcessRam - a)));
+    const uint8_t n =
+        csr_chunk(a, static_cast<uint32_t>(std::min<size_t>(src.size() - i, kProcessRam - a)));
     csr_write(static_cast<uint16_t>(a), &src[i], n);
     a += n;
     i += n;

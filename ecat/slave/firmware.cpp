@@ -18,8 +18,8 @@ constexpr uint32_t kEventSm0 = 0x0100;
 constexpr uint32_t kEventSm2 = 0x0400;
 constexpr uint32_t kEventSm3 = 0x0800;
 // The events the firmware takes: AL control, SYNC0/1, SM activation, watchdog, SM0-SM3.
-constexpr uint32_t kEventMask = kEventAlControl | kEventSync0 | kEventSync1 |
-                                kEventSmActivation | kEventWatchdog | 0x0F00;
+constexpr uint32_t kEventMask =
+    kEventAlControl | kEventSync0 | kEventSync1 | kEventSmActivation | kEventWatchdog | 0x0F00;
 
 }  // namespace
 
@@ -78,9 +78,10 @@ void Firmware::poll() {
   if (state_ == EsmState::SafeOp || state_ == EsmState::Op) {
     // A SyncManager configured without AL event (control bit 5) is polled by its status: SM2
     // written by the master, SM3 read by it (ESI devices without mailbox, e.g. ControlByte 0x00).
-    const bool sm2 = (events & kEventSm2) ||
-                     (sm_taken_[2].enabled && !(sm_taken_[2].control & reg::sm::kControlAlEvent) &&
-                      (pdi_.read8(reg::sm::base(2) + reg::kSmStatusOffset) & reg::sm::kStatusWritten));
+    const bool sm2 =
+        (events & kEventSm2) ||
+        (sm_taken_[2].enabled && !(sm_taken_[2].control & reg::sm::kControlAlEvent) &&
+         (pdi_.read8(reg::sm::base(2) + reg::kSmStatusOffset) & reg::sm::kStatusWritten));
     const bool sm3 = (events & kEventSm3) ||
                      (sm_taken_[3].enabled && !(sm_taken_[3].control & reg::sm::kControlAlEvent) &&
                       (pdi_.read8(reg::sm::base(3) + reg::kSmStatusOffset) & reg::sm::kStatusRead));

@@ -30,8 +30,7 @@ class FuzzDevice final : public Application, public MailboxProtocol {
   void add_mailbox_protocols(MailboxServer& server) override {
     server.add(mailbox_type::kCoE, *this);
   }
-  size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                    EsmState) override {
+  size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply, EsmState) override {
     const size_t n = std::min(request.size(), reply.size());
     std::copy_n(request.begin(), n, reply.begin());
     return n;

@@ -25,8 +25,7 @@ bool CanSdoServer::handle(const CanFrame& request, EsmState state, CanFrame& res
     // CiA 301 §7.2.4.3: SDO frames always carry 8 bytes. Anything else is no valid command.
     const uint8_t abort[8] = {coe::sdo::kAbortCommand, 0, 0, 0, 0, 0, 0, 0};
     response = CanFrame::make(cob::kSdoTx + node_, abort);
-    le::put32(response.data.data() + 4,
-                  static_cast<uint32_t>(coe::AbortCode::CommandSpecifier));
+    le::put32(response.data.data() + 4, static_cast<uint32_t>(coe::AbortCode::CommandSpecifier));
     has_response = true;
     return true;
   }

@@ -63,8 +63,7 @@ void EncoderDriver::attach(mdp::Device& device) {
   device_ = &device;
   auto inner = settings_->hooks.validate_write;
   settings_->hooks.validate_write = [this, inner](const coe::Object& obj, int subindex,
-                                                  std::span<const uint8_t> data,
-                                                  EsmState state) {
+                                                  std::span<const uint8_t> data, EsmState state) {
     const coe::AbortCode rc = inner ? inner(obj, subindex, data, state) : coe::AbortCode::None;
     if (rc != coe::AbortCode::None) {
       report(text::kEncoderParameter, static_cast<uint16_t>(subindex > 0 ? subindex : 0));

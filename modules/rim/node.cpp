@@ -106,8 +106,7 @@ void RimNode::handle(const CanFrame& f, Micros now) {
   if (nmt_.state() != NmtState::Stopped) {
     CanFrame reply;
     bool has_reply = false;
-    const EsmState access =
-        nmt_.state() == NmtState::Operational ? EsmState::Op : EsmState::PreOp;
+    const EsmState access = nmt_.state() == NmtState::Operational ? EsmState::Op : EsmState::PreOp;
     if (can_sdo_.handle(f, access, reply, has_reply)) {
       ++counters_.sdo_requests;
       if (has_reply) {

@@ -38,7 +38,8 @@ class FakePdi final : public PdiPort {
     const uint16_t sm0_start = le::get16(&mem[0x0800]);
     const uint16_t sm0_len = le::get16(&mem[0x0802]);
     if (sm0_len != 0 && covers(sm0_start)) clear_event(0x0100);
-    if (sm0_len != 0 && covers(sm0_start + sm0_len - 1u)) mem[0x0805] &= static_cast<uint8_t>(~0x08);
+    if (sm0_len != 0 && covers(sm0_start + sm0_len - 1u))
+      mem[0x0805] &= static_cast<uint8_t>(~0x08);
   }
   void write(uint16_t address, std::span<const uint8_t> src) override {
     writes.push_back({address, std::vector<uint8_t>(src.begin(), src.end())});

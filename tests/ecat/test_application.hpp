@@ -48,7 +48,7 @@ class TestApplication : public Application, public MailboxProtocol {
 
   std::vector<uint8_t> sii;
   ProcessDataSizes sizes{kOutputBytes, kInputBytes};
-  uint16_t veto_code = 0;           // returned by on_state_request when non-zero
+  uint16_t veto_code = 0;             // returned by on_state_request when non-zero
   EsmState veto_to = EsmState::Init;  // ... for requests to this state
   std::vector<uint8_t> inputs_value = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66};
   std::vector<uint8_t> last_outputs;

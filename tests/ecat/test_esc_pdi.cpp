@@ -91,8 +91,8 @@ TEST_F(ChipTest, PdiWritesOnlyItsRegisters) {
   EXPECT_EQ(esc.read16(0x0130), 0x0012);
   EXPECT_EQ(esc.read16(0x0134), 0x001D);
   EXPECT_EQ(esc.read16(0x0210) & 0x0008, 0x0008);  // AL status event for the master
-  pdi_write8(0x0010, 0x55);                         // station address: ECAT only
-  pdi_write8(0x0120, 0x08);                         // AL control: ECAT only
+  pdi_write8(0x0010, 0x55);                        // station address: ECAT only
+  pdi_write8(0x0120, 0x08);                        // AL control: ECAT only
   EXPECT_EQ(esc.read8(0x0010), 0x00);
   EXPECT_EQ(esc.read8(0x0120), 0x01);
   const auto r = aprd(0x0130, 2);  // the master reads AL status: event cleared
@@ -113,7 +113,7 @@ TEST_F(ChipTest, MailboxWrittenByTheMasterIsReadAndFreedByThePdi) {
   sm(0, 0x1000, 16, 0x26);  // mailbox, ECAT writes, AL event enabled
   std::vector<uint8_t> msg(16, 0xA5);
   EXPECT_EQ(apwr(0x1000, msg), 1);
-  EXPECT_EQ(al_events() & 0x0100, 0x0100u);  // SM0 event for the firmware
+  EXPECT_EQ(al_events() & 0x0100, 0x0100u);   // SM0 event for the firmware
   EXPECT_EQ(esc.read8(0x0805) & 0x08, 0x08);  // full
   EXPECT_EQ(apwr(0x1000, msg), 0);            // a full mailbox refuses the master
   std::vector<uint8_t> got(16, 0);
@@ -127,7 +127,7 @@ TEST_F(ChipTest, MailboxWrittenByTheMasterIsReadAndFreedByThePdi) {
 }
 
 TEST_F(ChipTest, MailboxWrittenByThePdiIsHandedOverOnItsLastByte) {
-  sm(1, 0x1080, 16, 0x22);  // mailbox, ECAT reads
+  sm(1, 0x1080, 16, 0x22);                // mailbox, ECAT reads
   EXPECT_EQ(aprd(0x1080, 16).second, 0);  // empty: no data for the master
   std::vector<uint8_t> msg(16, 0x3C);
   esc.pdi_write(0x1080, msg.data(), 15);
@@ -140,7 +140,7 @@ TEST_F(ChipTest, MailboxWrittenByThePdiIsHandedOverOnItsLastByte) {
   EXPECT_EQ(r.second, 1);
   EXPECT_EQ(r.first, msg);
   EXPECT_EQ(al_events() & 0x0200, 0x0200u);  // read by the master: SM1 event
-  esc.pdi_write(0x1080, other.data(), 1);     // first byte clears it
+  esc.pdi_write(0x1080, other.data(), 1);    // first byte clears it
   EXPECT_EQ(al_events() & 0x0200, 0x0000u);
 }
 

@@ -9,7 +9,6 @@
 namespace rackcat::mdp {
 namespace {
 
-
 // A rack with a known layout: DOUTx16 (module 1), DINx16 (2), AOUTx8 (3), DOUTx4+DINx4 (4).
 const char* kRack = R"(rims:
   - rim: 1

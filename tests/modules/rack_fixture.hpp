@@ -15,7 +15,6 @@
 
 namespace rackcat::modules::testing {
 
-
 inline mdp::DeviceOptions device_options() {
   mdp::DeviceOptions o;
   o.state_dir = ::testing::TempDir() + "rackcat-modules-state";
