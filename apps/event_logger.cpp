@@ -10,6 +10,7 @@
 #include <memory>
 #include <string_view>
 
+#include "base/esm_state.hpp"
 #include "coe/abort_code.hpp"
 #include "coe/mailbox_error.hpp"
 #include "ecat/al_status_code.hpp"
@@ -44,23 +45,6 @@ class JsonLinesFormatter final : public spdlog::formatter {
     return std::make_unique<JsonLinesFormatter>();
   }
 };
-
-std::string_view state_name(uint8_t s) {
-  switch (s & 0x0F) {
-    case 0x01:
-      return "INIT";
-    case 0x02:
-      return "PREOP";
-    case 0x03:
-      return "BOOT";
-    case 0x04:
-      return "SAFEOP";
-    case 0x08:
-      return "OP";
-    default:
-      return "?";
-  }
-}
 
 std::string_view rim_state_name(uint8_t s) {
   constexpr std::string_view kNames[] = {"OFFLINE", "CONNECTED", "ONLINE", "ERROR"};
@@ -102,23 +86,23 @@ std::string describe_event(const base::Event& e, int& level, nlohmann::json& f) 
     case EventKind::EsmTransition: {
       const uint8_t requested = e.c & 0x0F;
       f["event"] = "esm_transition";
-      f["from"] = state_name(e.a);
-      f["to"] = state_name(e.b);
+      f["from"] = esm_state_name(e.a);
+      f["to"] = esm_state_name(e.b);
       f["al_control"] = e.c;
       f["al_status_code"] = e.code;
       if (requested == e.b) {
-        return fmt::format("ESM {} -> {} (master's AL control 0x{:02X})", state_name(e.a),
-                           state_name(e.b), e.c);
+        return fmt::format("ESM {} -> {} (master's AL control 0x{:02X})", esm_state_name(e.a),
+                           esm_state_name(e.b), e.c);
       }
       level = spdlog::level::warn;
       return fmt::format("ESM {} -> {} on its own (master's AL control 0x{:02X} asks for {})",
-                         state_name(e.a), state_name(e.b), e.c, state_name(requested));
+                         esm_state_name(e.a), esm_state_name(e.b), e.c, esm_state_name(requested));
     }
     case EventKind::EsmError: {
       const uint8_t requested = e.c & 0x0F;
       f["event"] = "esm_error";
-      f["from"] = state_name(e.a);
-      f["to"] = state_name(e.b);
+      f["from"] = esm_state_name(e.a);
+      f["to"] = esm_state_name(e.b);
       f["al_control"] = e.c;
       f["al_status_code"] = e.code;
       f["al_status_name"] = ecat::al_status_code_name(e.code);
@@ -128,19 +112,20 @@ std::string describe_event(const base::Event& e, int& level, nlohmann::json& f) 
         return fmt::format(
             "ESM refused {} -> {} requested by the master (AL control 0x{:02X}): "
             "AL status code {}; stays in {} with the error flag",
-            state_name(e.a), state_name(requested), e.c, code_text(e.code), state_name(e.a));
+            esm_state_name(e.a), esm_state_name(requested), e.c, code_text(e.code),
+            esm_state_name(e.a));
       }
       return fmt::format("ESM error in {}: AL status code {}; {} with the error flag",
-                         state_name(e.a), code_text(e.code),
-                         e.a == e.b ? fmt::format("stays in {}", state_name(e.b))
-                                    : fmt::format("falls to {}", state_name(e.b)));
+                         esm_state_name(e.a), code_text(e.code),
+                         e.a == e.b ? fmt::format("stays in {}", esm_state_name(e.b))
+                                    : fmt::format("falls to {}", esm_state_name(e.b)));
     }
     case EventKind::WatchdogExpired:
       f["event"] = "watchdog_expired";
-      f["state"] = state_name(e.a);
+      f["state"] = esm_state_name(e.a);
       f["count"] = e.value;
       level = spdlog::level::warn;
-      return fmt::format("process-data watchdog expired in {} (count {})", state_name(e.a),
+      return fmt::format("process-data watchdog expired in {} (count {})", esm_state_name(e.a),
                          e.value);
     case EventKind::MailboxError:
       f["event"] = "mailbox_error";

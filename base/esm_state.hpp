@@ -16,4 +16,25 @@ constexpr bool is_esm_state(uint8_t v) {
   return v == 0x01 || v == 0x02 || v == 0x03 || v == 0x04 || v == 0x08;
 }
 
+// The state's name as masters and logs print it; "?" for a value that names no state.
+constexpr const char* esm_state_name(uint8_t v) {
+  switch (v & 0x0F) {
+    case 0x01:
+      return "INIT";
+    case 0x02:
+      return "PREOP";
+    case 0x03:
+      return "BOOT";
+    case 0x04:
+      return "SAFEOP";
+    case 0x08:
+      return "OP";
+    default:
+      return "?";
+  }
+}
+constexpr const char* esm_state_name(EsmState s) {
+  return esm_state_name(static_cast<uint8_t>(s));
+}
+
 }  // namespace rackcat

@@ -26,22 +26,6 @@ struct BadRequest : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-const char* esm_name(EsmState s) {
-  switch (s) {
-    case EsmState::Init:
-      return "INIT";
-    case EsmState::PreOp:
-      return "PREOP";
-    case EsmState::Boot:
-      return "BOOT";
-    case EsmState::SafeOp:
-      return "SAFEOP";
-    case EsmState::Op:
-      return "OP";
-  }
-  return "?";
-}
-
 const char* fault_name(WiringFault f) {
   switch (f) {
     case WiringFault::None:
@@ -274,7 +258,7 @@ json rack_json(Rack& rack) {
   }
   json modules = json::array();
   for (const auto& d : rack.drivers()) modules.push_back(module_json(rack, *d));
-  return {{"esm", esm_name(rack.esm_state())},
+  return {{"esm", esm_state_name(rack.esm_state())},
           {"outputs_valid", rack.outputs_valid()},
           {"detect_modules_override", rack.detect_modules_override()},
           {"cpu_fan_rpm", rack.cpu_fan_rpm()},
@@ -764,7 +748,7 @@ ControlApi::Prepared ControlApi::dispatch(Rack& rack, std::string_view method,
     if (!get) return wrong_method("GET");
     return run([r] {
       return Response{200,
-                      {{"state", esm_name(r->esm_state())},
+                      {{"state", esm_state_name(r->esm_state())},
                        {"outputs_valid", r->outputs_valid()},
                        {"detect_modules_override", r->detect_modules_override()}}};
     });

@@ -10,22 +10,6 @@
 namespace rackcat::modules {
 namespace {
 
-const char* esm_text(EsmState s) {
-  switch (s) {
-    case EsmState::Init:
-      return "INIT";
-    case EsmState::PreOp:
-      return "PREOP";
-    case EsmState::Boot:
-      return "BOOT";
-    case EsmState::SafeOp:
-      return "SAFEOP";
-    case EsmState::Op:
-      return "OP";
-  }
-  return "?";
-}
-
 double finite(double v) {
   return std::isfinite(v) ? v : 0.0;
 }
@@ -123,7 +107,7 @@ std::string LiveSnapshot::to_json() const {
               {"product_code", fmt::format("0x{:08X}", l.product_code)},
               {"revision", fmt::format("0x{:08X}", l.revision)}};
     if (!s.rack) {
-      link["esm"] = esm_text(static_cast<EsmState>(l.al_status & 0x0F));
+      link["esm"] = esm_state_name(l.al_status);
       slaves.push_back(std::move(link));
       continue;
     }
@@ -149,7 +133,7 @@ std::string LiveSnapshot::to_json() const {
       modules.push_back(
           {{"module", m.number}, {"in", std::move(inputs)}, {"out", std::move(outputs)}});
     }
-    link.update({{"esm", esm_text(s.esm)}, {"outputs_valid", s.outputs_valid}});
+    link.update({{"esm", esm_state_name(s.esm)}, {"outputs_valid", s.outputs_valid}});
     link.update(json{{"cpu_fan_rpm", finite(s.cpu_fan_rpm)},
                      {"cpu_temperature", finite(s.cpu_temperature)},
                      {"F380", hex32(s.summary_active)},

@@ -10,9 +10,11 @@
 
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mdp/device.hpp"
@@ -169,6 +171,35 @@ class DeviceSdoTest : public ::testing::Test {
 
  private:
   std::string state_dir_name_;
+};
+
+// A default-rack device in PREOP whose state directory survives restart(): stored parameters
+// are loaded as at power-on. `prefix` names the directory (plus the running test's name).
+class RestartingDeviceTest : public ::testing::Test {
+ protected:
+  explicit RestartingDeviceTest(std::string prefix) : prefix_(std::move(prefix)) {}
+  void SetUp() override {
+    dir = ::testing::TempDir() + "/" + prefix_ +
+          ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    std::filesystem::remove_all(dir);
+    restart();
+  }
+  void restart() {
+    sdo.reset();
+    device.reset();
+    DeviceOptions opt;
+    opt.state_dir = dir;
+    device = std::make_unique<Device>(default_rack(), opt);
+    sdo = std::make_unique<SdoClient>(*device);
+    device->state_changed(EsmState::Init, EsmState::PreOp);
+  }
+
+  std::string dir;
+  std::unique_ptr<Device> device;
+  std::unique_ptr<SdoClient> sdo;
+
+ private:
+  std::string prefix_;
 };
 
 }  // namespace rackcat::mdp::testing

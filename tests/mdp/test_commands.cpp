@@ -27,23 +27,9 @@ const std::vector<uint8_t> kDeviceReset{0x74, 0x65, 0x73, 0x65, 0x72, 0x00};
 const std::vector<uint8_t> kFactoryReset{0x74, 0x65, 0x73, 0x65, 0x72, 0x66};
 constexpr uint32_t kIncompatible = 0x06040043;
 
-class Commands : public ::testing::Test {
+class Commands : public testing::RestartingDeviceTest {
  protected:
-  void SetUp() override {
-    dir = ::testing::TempDir() + "/mdp_commands_" +
-          ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    std::filesystem::remove_all(dir);
-    restart();
-  }
-  void restart() {
-    sdo.reset();
-    device.reset();
-    DeviceOptions opt;
-    opt.state_dir = dir;
-    device = std::make_unique<Device>(default_rack(), opt);
-    sdo = std::make_unique<SdoClient>(*device);
-    device->state_changed(EsmState::Init, EsmState::PreOp);
-  }
+  Commands() : RestartingDeviceTest("mdp_commands_") {}
   void go(EsmState to) { device->state_changed(device->state(), to); }
   // 0xFBF0, 0xFBF2, 0xFBF3 and 0xFBF4 answer at once with status 255 (executing); the file work
   // finishes on a worker thread and the status changes when the master polls subindex 2.
@@ -68,9 +54,6 @@ class Commands : public ::testing::Test {
     EXPECT_EQ(sdo->upload(index, sub, d), 0u);
     return d;
   }
-  std::string dir;
-  std::unique_ptr<Device> device;
-  std::unique_ptr<SdoClient> sdo;
 };
 
 TEST_F(Commands, StoreKeepsParametersOverARestart) {

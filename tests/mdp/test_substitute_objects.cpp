@@ -21,31 +21,13 @@ namespace sv = substitute;
 
 constexpr uint32_t kValueRange = 0x06090030, kValueTooHigh = 0x06090031;
 
-class SubstituteObjects : public ::testing::Test {
+class SubstituteObjects : public testing::RestartingDeviceTest {
  protected:
-  void SetUp() override {
-    dir = ::testing::TempDir() + "/mdp_substitute_" +
-          ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    std::filesystem::remove_all(dir);
-    restart();
-  }
-  void restart() {
-    sdo.reset();
-    device.reset();
-    DeviceOptions opt;
-    opt.state_dir = dir;
-    device = std::make_unique<Device>(default_rack(), opt);
-    sdo = std::make_unique<SdoClient>(*device);
-    device->state_changed(EsmState::Init, EsmState::PreOp);
-  }
+  SubstituteObjects() : RestartingDeviceTest("mdp_substitute_") {}
   // Module n's object 0x4nnX.
   uint16_t index(uint16_t module, uint8_t nibble) {
     return device->modules()[module - 1].index(0x4000, nibble);
   }
-
-  std::string dir;
-  std::unique_ptr<Device> device;
-  std::unique_ptr<SdoClient> sdo;
 };
 
 // Default rack: module 1 = RIM 1 slot 1 CDO-10 (16 outputs), module 2 = slot 2 CDI-10.

@@ -7,6 +7,7 @@
 #include <bit>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mdp/device.hpp"
@@ -36,7 +37,9 @@ struct Emergency {
 
 class RackTest : public ::testing::Test {
  protected:
-  RackTest() : device(mdp::default_rack(), device_options()), rack(device, rack_options(&clock)) {
+  RackTest() : RackTest(mdp::default_rack()) {}
+  explicit RackTest(mdp::RackConfig config)
+      : device(std::move(config), device_options()), rack(device, rack_options(&clock)) {
     drain_emergencies();
   }
 

@@ -31,15 +31,11 @@ rims:
       - {slot: 2, card: CDI-13}
 )";
 
-class EncoderCard : public ::testing::Test {
+class EncoderCard : public RackTest {
  protected:
-  EncoderCard()
-      : device(mdp::parse_rack_config(kRack, "<encoder test>"), device_options()),
-        rack(device, rack_options(&clock)) {
-    device.state_changed(EsmState::Init, EsmState::PreOp);
-    device.state_changed(EsmState::PreOp, EsmState::SafeOp);
-    device.state_changed(EsmState::SafeOp, EsmState::Op);
-    drain();
+  EncoderCard() : RackTest(mdp::parse_rack_config(kRack, "<encoder test>")) {
+    to_op();
+    drain_emergencies();
   }
   // One 1 ms cycle with the control words STW2_ENC / G1_STW1.
   void cycle(uint16_t stw2, uint16_t stw) {
@@ -79,27 +75,6 @@ class EncoderCard : public ::testing::Test {
     if (o.hooks.after_write) o.hooks.after_write(o, sub);
     return coe::AbortCode::None;
   }
-  std::vector<Emergency> drain() {
-    std::vector<Emergency> out;
-    uint8_t buf[256];
-    for (size_t n; (n = device.poll_mailbox(buf)) > 0;) {
-      if (n < 16 || (buf[5] & 0x0F) != 0x03 || (buf[7] >> 4) != 0x01) continue;
-      Emergency e{static_cast<uint16_t>(buf[8] | buf[9] << 8), buf[10], {}};
-      std::copy(buf + 11, buf + 16, e.data.begin());
-      out.push_back(e);
-    }
-    return out;
-  }
-  static bool has(const std::vector<Emergency>& v, uint16_t code) {
-    for (const auto& e : v)
-      if (e.code == code) return true;
-    return false;
-  }
-
-  double clock = 0.0;
-  mdp::Device device;
-  Rack rack;
-  std::vector<uint8_t> in;
   int ls = 0;
 };
 
@@ -155,11 +130,11 @@ TEST_F(EncoderCard, PresetBySdoAndNotWithoutClass4) {
 }
 
 TEST_F(EncoderCard, RefusedCombinationAbortsAndLeavesADiagnosisMessage) {
-  drain();
+  drain_emergencies();
   // 65537 units per revolution on a 65536-step encoder: 0x06090031, nothing changes.
   EXPECT_EQ(sdo(settings(), enc::kUnitsPerRev, 65537), coe::AbortCode::ValueTooHigh);
   EXPECT_EQ(settings().get_u(enc::kUnitsPerRev), 65536u);
-  EXPECT_TRUE(has(drain(), 0x6320));
+  EXPECT_TRUE(has_code(drain_emergencies(), 0x6320));
   // Units 1000 with the default range 2^28 > 1000 x 4096: a combination.
   EXPECT_EQ(sdo(settings(), enc::kUnitsPerRev, 1000), coe::AbortCode::ParameterIncompatible);
   // Range first, then units: accepted; 100 turns of 1000 units is a round axis.
@@ -173,7 +148,7 @@ TEST_F(EncoderCard, RefusedCombinationAbortsAndLeavesADiagnosisMessage) {
 TEST_F(EncoderCard, MasterSignOfLifeFailure) {
   ASSERT_EQ(sdo(settings(), enc::kMaxLifeFailures, 3), coe::AbortCode::None);
   run(20);
-  drain();
+  drain_emergencies();
   // The master's counter stops: +10 per cycle, failure at 10 x 3 = 30, i.e. the third cycle.
   const uint16_t stuck = static_cast<uint16_t>(ls << 12 | 1u << 10);
   cycle(stuck, 0);
@@ -182,7 +157,7 @@ TEST_F(EncoderCard, MasterSignOfLifeFailure) {
   cycle(stuck, 0);
   EXPECT_NE(zsw() & (1u << 15), 0);
   EXPECT_EQ(xist2(), 0x0F04u);
-  EXPECT_TRUE(has(drain(), 0x8100));
+  EXPECT_TRUE(has_code(drain_emergencies(), 0x8100));
   // Counting again does not clear it; the acknowledgement (bit 15 edge) does.
   run(5);
   EXPECT_NE(zsw() & (1u << 15), 0);
@@ -202,18 +177,18 @@ TEST_F(EncoderCard, InjectedFaultsSetTheErrorBitWithTheirCode) {
        {Case{EncoderFault::Hardware, 0x0001, 0x5000}, Case{EncoderFault::Jump, 0x1002, 0x7300},
         Case{EncoderFault::Frozen, 0x1003, 0x7300}}) {
     run(5);
-    drain();
+    drain_emergencies();
     rack.set_encoder_fault(1, c.fault, true, 5000);
     run(1);
     EXPECT_NE(zsw() & (1u << 15), 0);
     EXPECT_EQ(xist2(), c.code);
-    EXPECT_TRUE(has(drain(), c.emergency));
+    EXPECT_TRUE(has_code(drain_emergencies(), c.emergency));
     // Parking sensor (bit 14): no error shown.
     run(1, 1u << 14);
     EXPECT_EQ(zsw() & (1u << 15), 0);
     EXPECT_NE(zsw() & (1u << 14), 0);
     rack.set_encoder_fault(1, c.fault, false);
-    EXPECT_TRUE(has(drain(), 0x0000)) << "the removed message";
+    EXPECT_TRUE(has_code(drain_emergencies(), 0x0000)) << "the removed message";
     run(1);
     EXPECT_NE(zsw() & (1u << 15), 0) << "latched until acknowledged";
     run(1, 1u << 15);
