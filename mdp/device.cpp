@@ -196,8 +196,9 @@ struct Device::Impl {
         load_report = r->report;
         complete(0xFBF0, cmd::kStatusError);
       } else {
-        // The reset restarts the firmware: a container installed since power-on runs now.
-        select_firmware();
+        // The reset restarts the firmware: a container installed since power-on runs now (read
+        // and verified by the worker with the reset job).
+        apply_firmware(std::move(reset_firmware));
         apply_firmware_version(od, config.control);
         power_on_reset(*r);  // every object, 0xFBF0 included, back to power-on values
         notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
@@ -305,24 +306,45 @@ struct Device::Impl {
                          cm.firmware_version.substr(0, kFirmwareShortVersionMax)};
     select_firmware();
   }
+  // The installed container, read and verified: file work, so a device reset (0xFBF0) does it
+  // on the worker thread (read_firmware_for_reset); only power-on calls it on the caller's.
+  struct FirmwareChoice {
+    std::optional<std::vector<uint8_t>> bytes;  // a valid container, else the built-in firmware
+    FirmwareInfo info;
+    std::string report;  // why an installed file was ignored (no file content)
+  };
+  // Written by the worker during a 0xFBF0 job; read once its result has been taken (the
+  // writer's mutex orders the two).
+  FirmwareChoice reset_firmware;
+  static FirmwareChoice read_firmware(const FirmwareStore& store, uint32_t vendor_id,
+                                      uint32_t product_code) {
+    FirmwareChoice c;
+    std::string detail;
+    auto bytes = store.read_installed(kMaxFirmwareFile, detail);
+    if (!bytes) return c;
+    if (verify_firmware(*bytes, vendor_id, product_code, c.info, detail) == foe::FoeError::None) {
+      c.bytes = std::move(bytes);
+    } else {
+      c.report = "ignored firmware " + store.path() + ": " + detail + "; ";
+    }
+    return c;
+  }
   // Power-on and device reset (0xFBF0): the versions of the container that runs from now on.
   void select_firmware() {
-    std::string detail;
+    apply_firmware(read_firmware(*firmware, config.control.vendor_id, config.control.product_code));
+  }
+  void apply_firmware(FirmwareChoice choice) {
     auto& cm = config.control;
-    firmware_report.clear();
-    if (auto bytes = firmware->read_installed(kMaxFirmwareFile, detail)) {
-      FirmwareInfo info;
-      if (verify_firmware(*bytes, cm.vendor_id, cm.product_code, info, detail) ==
-          foe::FoeError::None) {
-        cm.revision = info.revision;
-        cm.software_version = info.software_version;
-        cm.firmware_version =
-            info.short_version.empty() ? built_in_firmware.short_version : info.short_version;
-        running_firmware = std::move(*bytes);
-        firmware_report = "firmware " + cm.software_version + " from " + firmware->path();
-        return;
-      }
-      firmware_report = "ignored firmware " + firmware->path() + ": " + detail + "; ";
+    firmware_report = std::move(choice.report);
+    if (choice.bytes) {
+      const FirmwareInfo& info = choice.info;
+      cm.revision = info.revision;
+      cm.software_version = info.software_version;
+      cm.firmware_version =
+          info.short_version.empty() ? built_in_firmware.short_version : info.short_version;
+      running_firmware = std::move(*choice.bytes);
+      firmware_report = "firmware " + cm.software_version + " from " + firmware->path();
+      return;
     }
     cm.revision = built_in_firmware.revision;
     cm.software_version = built_in_firmware.software_version;
@@ -491,7 +513,11 @@ void Device::Impl::install_hooks() {
       0xFBF0,
       [this](std::span<const uint8_t> c) {
         reset_factory = c[5] == cmd::kFactoryReset;
-        writer->submit_reset(params->fingerprint(), reset_factory);
+        writer->submit_reset(params->fingerprint(), reset_factory,
+                             [this, store = firmware.get(), vendor = config.control.vendor_id,
+                              product = config.control.product_code] {
+                               reset_firmware = read_firmware(*store, vendor, product);
+                             });
         pending.status = cmd::kStatusExecuting;
         return AbortCode::None;
       },

@@ -77,10 +77,11 @@ void ParameterWriter::submit_load(uint32_t fingerprint) {
   submit(Job::Load, std::move(r));
 }
 
-void ParameterWriter::submit_reset(uint32_t fingerprint, bool factory) {
+void ParameterWriter::submit_reset(uint32_t fingerprint, bool factory, std::function<void()> also) {
   Request r;
   r.fingerprint = fingerprint;
   r.factory = factory;
+  r.also = std::move(also);
   submit(Job::Reset, std::move(r));
 }
 
@@ -124,6 +125,7 @@ ParameterWriter::Result ParameterWriter::execute(Job job, const Request& r) cons
       break;
     }
     case Job::Reset:
+      if (r.also) r.also();
       if (r.factory && !store_.remove(out.report)) break;
       [[fallthrough]];
     case Job::Load: {

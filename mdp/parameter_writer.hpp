@@ -20,6 +20,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -54,7 +55,9 @@ class ParameterWriter final : private BackgroundWorker::Client {
   // over `defaults` when nothing valid is stored.
   void submit_checksum(uint32_t fingerprint, uint8_t algorithm, std::vector<uint8_t> defaults);
   void submit_load(uint32_t fingerprint);
-  void submit_reset(uint32_t fingerprint, bool factory);
+  // `also`: more file work of the reset (the device's firmware container), run on the worker
+  // before the result is published.
+  void submit_reset(uint32_t fingerprint, bool factory, std::function<void()> also = {});
 
   // The result of `job` once it has finished, taken once; nullopt while it is queued or
   // running, or when none was submitted.
@@ -72,6 +75,7 @@ class ParameterWriter final : private BackgroundWorker::Client {
     std::vector<uint8_t> payload;  // Store: the snapshot; Checksum: the defaults
     uint8_t algorithm = 0;
     bool factory = false;
+    std::function<void()> also;  // Reset: the caller's own file work
   };
   struct Slot {
     bool queued = false;
