@@ -171,13 +171,16 @@ int run(const RunArgs& a) {
     });
   }
 
-  // 0xFBF0 device reset: the rack restarts its firmware too (back to INIT, no error).
+  // 0xFBF0 device reset: the rack restarts its firmware too (back to INIT, no error). The
+  // restarted firmware first stores the SII image of the version that runs now into the ESC's
+  // EEPROM (word 0x0C revision; ecat/slave/eeprom_store.cpp), so the master's next scan reads it.
   for (size_t r = 0; r < racks.size(); ++r) {
     const size_t i = rack_position[r];
     RackSlave* slave = racks[r].get();
     racks[r]->set_restart_handler([&runner, &segment, i, slave] {
       runner.loop().post([&segment, i, slave] {
         slave->finish_device_reset();
+        segment.slave(i).firmware().store_eeprom();
         segment.slave(i).firmware().application_restart();
       });
     });

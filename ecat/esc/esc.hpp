@@ -128,8 +128,8 @@ class Esc {
   uint16_t read16(uint16_t address) const;
   uint32_t read32(uint16_t address) const;
   uint64_t read64(uint16_t address) const;
-  // The SII EEPROM as the ESC holds it (initial image plus master writes), padded with 0xFF
-  // to the size declared in word 0x3E.
+  // The SII EEPROM as the ESC holds it (initial image plus master and PDI writes), padded with
+  // 0xFF to the size declared in word 0x3E.
   std::span<const uint8_t> eeprom() const { return sii_; }
 
  private:
@@ -186,12 +186,14 @@ class Esc {
   // pdi.cpp: the microcontroller's accesses.
   bool pdi_buffer_write(uint16_t address, const uint8_t* src, uint16_t len);
   void pdi_buffer_read_done(uint16_t address, uint16_t len);
-  void pdi_registers_written(uint16_t address, const uint8_t* src, uint16_t len);
+  void pdi_registers_written(uint16_t address, const uint8_t* src, uint16_t len, bool sii_owned);
   void pdi_registers_read(uint16_t address, uint16_t len);
   // sii.cpp: EEPROM interface.
   void sii_load_image();
   void sii_reload_config_area();
   void sii_command(uint8_t control_lo, uint8_t command, bool control_lo_written);
+  bool sii_assigned_to_pdi() const;
+  uint8_t sii_pdi_write_mask(uint16_t address, bool sii_owned) const;
   // distributed_clock.cpp
   void dc_latch_receive_times();
   void dc_system_time_written(uint16_t address, const uint8_t* src, uint16_t len);

@@ -8,6 +8,12 @@
 // an SM activation register 0x0806+8n bit 4, 0x0440 (watchdog status) bit 6, 0x098E/0x098F
 // (SYNC0/1 status, also cleared) bits 2/3.
 //
+// SII EEPROM interface (ESC datasheet 0x0500-0x050F, ETG.1000.4 §6.4.5): the PDI may take the
+// EEPROM (0x0501 bit 0) once the master offers it (0x0500 bit 0); while both bits are set the
+// interface is the PDI's: it writes control/command 0x0502-0x0503, address 0x0504 and data
+// 0x0508 and the master's writes there are ignored (sii.cpp). A microcontroller uses this to
+// store a new EEPROM content, e.g. after a firmware update.
+//
 // SyncManager buffers, seen from the PDI (ETG.1000.4 §6.7.1/§6.7.2):
 //   - a buffer the master writes (SM0 mailbox, SM2 outputs): reading its first byte clears the
 //     "written" status and AL event bit 8+n; reading its last byte empties a mailbox (full flag
@@ -70,12 +76,15 @@ void Esc::pdi_write(uint16_t address, const uint8_t* src, uint16_t len) {
   if (address < reg::kProcessRam) {
     const uint16_t n =
         static_cast<uint16_t>(std::min<uint32_t>(address + len, reg::kProcessRam) - address);
+    const bool sii_owned = sii_assigned_to_pdi();
     for (uint16_t i = 0; i < n; ++i) {
       const auto a = static_cast<uint16_t>(address + i);
-      const uint8_t mask = pdi_write_mask(a);
+      const uint8_t mask = a >= reg::kSiiPdiAccess && a < reg::kSiiData + 8
+                               ? sii_pdi_write_mask(a, sii_owned)
+                               : pdi_write_mask(a);
       mem_[a] = static_cast<uint8_t>((mem_[a] & ~mask) | (src[i] & mask));
     }
-    pdi_registers_written(address, src, n);
+    pdi_registers_written(address, src, n, sii_owned);
     if (n == len) return;
     address = static_cast<uint16_t>(address + n);
     src += n;
@@ -104,7 +113,14 @@ void Esc::pdi_registers_read(uint16_t address, uint16_t len) {
   le::put32(&mem_[reg::kAlEventRequest], events);
 }
 
-void Esc::pdi_registers_written(uint16_t address, const uint8_t* /*src*/, uint16_t len) {
+void Esc::pdi_registers_written(uint16_t address, const uint8_t* src, uint16_t len,
+                                bool sii_owned) {
+  if (sii_owned && overlaps(address, len, reg::kSiiControl + 1, 1)) {
+    // The command runs once the whole access is written (address and data written with it).
+    const bool lo = overlaps(address, len, reg::kSiiControl, 1);
+    sii_command(lo ? src[reg::kSiiControl - address] : 0,
+                src[reg::kSiiControl + 1 - address] & 0x07, lo);
+  }
   if (overlaps(address, len, reg::kAlStatus, 2)) {
     // AL status event for the master (ECAT event request 0x0210 bit 3), cleared when the
     // master reads 0x0130 (register_map.cpp).

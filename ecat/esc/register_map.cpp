@@ -92,6 +92,8 @@ void Esc::write_registers(uint16_t address, const uint8_t* src, uint16_t len) {
   for (uint16_t i = 0; i < len; ++i) {
     const uint16_t a = static_cast<uint16_t>(address + i);
     uint8_t mask = kWriteMask[a];
+    // The EEPROM interface's address and data are the PDI's while it holds the EEPROM.
+    if (a >= reg::kSiiAddress && a < reg::kSiiData + 8 && sii_assigned_to_pdi()) mask = 0;
     // SyncManager start/length/control can only be changed while the SM is disabled.
     if (a >= reg::kSm && a < reg::kSm + reg::kSmSize * kSyncManagers && (a & 7) < 5 &&
         sm_[(a - reg::kSm) >> 3].enabled) {
@@ -138,7 +140,7 @@ void Esc::after_register_write(uint16_t address, const uint8_t* src, uint16_t le
   if (overlaps(address, len, reg::kSiiConfig, 1) && (written(reg::kSiiConfig) & 0x02)) {
     mem_[reg::kSiiPdiAccess] &= 0xFE;  // force ECAT access: the PDI loses the EEPROM
   }
-  if (overlaps(address, len, reg::kSiiControl + 1, 1)) {
+  if (overlaps(address, len, reg::kSiiControl + 1, 1) && !sii_assigned_to_pdi()) {
     // The command (bits 8-10) runs once the whole access is written, so the address written
     // in the same datagram (SOEM writes control + address together) is used.
     const bool lo = overlaps(address, len, reg::kSiiControl, 1);

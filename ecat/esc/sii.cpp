@@ -1,5 +1,7 @@
 // SII EEPROM interface 0x0500-0x050F (ETG.1000.4 §6.4.5, ESC datasheet 0x0500-0x050F) and the
-// EEPROM load of the ESC configuration area (words 0-7) at power-up and on reload.
+// EEPROM load of the ESC configuration area (words 0-7) at power-up and on reload. The
+// interface belongs to the master unless it offered it to the PDI (0x0500 bit 0) and the PDI
+// took it (0x0501 bit 0); its owner alone writes 0x0502-0x050F (ESC datasheet 0x0502).
 #include <algorithm>
 #include <cstring>
 
@@ -37,6 +39,18 @@ uint8_t crc8(const uint8_t* p, size_t n) {
 }
 
 }  // namespace
+
+bool Esc::sii_assigned_to_pdi() const {
+  return (mem_[reg::kSiiConfig] & 0x01) != 0 && (mem_[reg::kSiiPdiAccess] & 0x01) != 0;
+}
+
+// PDI-writable bits of 0x0501-0x050F. Control/command 0x0502-0x0503 are actions
+// (pdi_registers_written runs the command), not stored.
+uint8_t Esc::sii_pdi_write_mask(uint16_t address, bool sii_owned) const {
+  if (address == reg::kSiiPdiAccess) return (mem_[reg::kSiiConfig] & 0x01) != 0 ? 0x01 : 0x00;
+  if (!sii_owned || address < reg::kSiiAddress) return 0x00;
+  return 0xFF;  // address 0x0504-0x0507, data 0x0508-0x050F
+}
 
 void Esc::sii_load_image() {
   const std::span<const uint8_t> image = eeprom_.image();

@@ -73,6 +73,7 @@ void Firmware::poll() {
     esm_sm_changed(before);
   }
   if (events & kEventWatchdog) pd_watchdog();
+  if (eeprom_pending_ && (pdi_.read8(reg::kSiiConfig) & 0x01) != 0) store_eeprom();
   if (events & kEventSync0) pd_sync(0);
   if (events & kEventSync1) pd_sync(1);
   if (state_ == EsmState::SafeOp || state_ == EsmState::Op) {

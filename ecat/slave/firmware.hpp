@@ -54,6 +54,12 @@ class Firmware {
   // slave again. Registers the master wrote (station address, SM/FMMU settings) are kept, as
   // they are when only the microcontroller behind an ESC resets.
   void application_restart();
+  // The device's EEPROM content changed (e.g. a new firmware runs after 0xFBF0): the firmware
+  // writes Application::eeprom() into the SII EEPROM through the PDI side of the EEPROM
+  // interface (eeprom_store.cpp), so the master's next SII read sees it. Returns false when
+  // the master holds the EEPROM (0x0500 bit 0 clear; poll() retries once it is offered) or a
+  // write failed. Not for the cyclic path: it reads the whole EEPROM through the interface.
+  bool store_eeprom();
 
   EsmState state() const { return state_; }
   bool error() const { return error_; }
@@ -115,6 +121,7 @@ class Firmware {
   std::array<Sm, 4> sm_{};        // SM0-SM3 as last read
   std::array<Sm, 4> sm_taken_{};  // ... as checked when the current state was entered
   bool dc_synchronised_ = false;  // SYNC0 was running when SAFEOP was entered
+  bool eeprom_pending_ = false;   // store_eeprom() waits for the master to offer the EEPROM
 
   std::vector<uint8_t> outputs_;  // SM2 as last read (sized on PREOP -> SAFEOP)
   std::vector<uint8_t> inputs_;   // SM3 image the device fills

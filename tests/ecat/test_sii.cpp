@@ -1,5 +1,6 @@
 // SII EEPROM interface (ETG.1000.4 §6.4.5, ESC datasheet 0x0500-0x050F): reads of 4 or 8
-// bytes, writes with write enable, error and NACK bits, reload of the configuration area.
+// bytes, writes with write enable, error and NACK bits, reload of the configuration area, and
+// the hand-over to the PDI (0x0500 bit 0 offered by the master, 0x0501 bit 0 taken by the PDI).
 #include <gtest/gtest.h>
 
 #include "ecat/registers.hpp"
@@ -123,6 +124,79 @@ TEST_F(SiiTest, ForcingEcatAccessClearsPdiAccess) {
   EXPECT_EQ(line.master->fprd8(kStation, 0x0501) & 0x01, 0);
   line.master->fpwr8(kStation, 0x0500, 0x01);
   EXPECT_EQ(line.master->fprd8(kStation, 0x0500), 0x01);
+}
+
+struct SiiPdiTest : SiiTest {
+  void pdi_write(uint16_t address, std::vector<uint8_t> v) {
+    line.esc(0).pdi_write(address, v.data(), static_cast<uint16_t>(v.size()));
+  }
+  uint8_t pdi8(uint16_t address) {
+    uint8_t v = 0;
+    line.esc(0).pdi_read(address, &v, 1);
+    return v;
+  }
+  uint16_t pdi16(uint16_t address) {
+    uint8_t v[2] = {};
+    line.esc(0).pdi_read(address, v, 2);
+    return static_cast<uint16_t>(v[0] | v[1] << 8);
+  }
+  // What a µC writes: data, then control (write command 010b + write enable) with the address.
+  void pdi_write_word(uint16_t word, uint16_t value) {
+    pdi_write(0x0508, bytes16(value));
+    pdi_write(0x0502, command(0x0201, word));
+  }
+};
+
+TEST_F(SiiPdiTest, PdiTakesTheEepromOnlyWhenTheMasterOffersIt) {
+  pdi_write(0x0501, {0x01});
+  EXPECT_EQ(pdi8(0x0501), 0x00);  // 0x0500 bit 0 clear: the master keeps it
+  pdi_write_word(0x0C, 0xBEEF);   // ignored: the interface is not the PDI's
+  EXPECT_TRUE(line.app(0).eeprom_writes.empty());
+  EXPECT_EQ(line.master->sii_read_word(kStation, 0x0C), kRevision & 0xFFFF);
+
+  line.master->fpwr8(kStation, 0x0500, 0x01);  // offered
+  pdi_write(0x0501, {0x01});
+  EXPECT_EQ(pdi8(0x0501), 0x01);
+}
+
+TEST_F(SiiPdiTest, PdiWritesWordsWhileItHoldsTheEepromAndTheMasterReadsThemAfter) {
+  line.master->fpwr8(kStation, 0x0500, 0x01);
+  pdi_write(0x0501, {0x01});
+  pdi_write_word(0x0C, 0x0100);  // revision low word
+  EXPECT_EQ(pdi16(0x0502) & 0x6000, 0);
+  ASSERT_EQ(line.app(0).eeprom_writes.size(), 1u);
+  EXPECT_EQ(line.app(0).eeprom_writes[0], std::make_pair(uint16_t{0x0C}, uint16_t{0x0100}));
+  // The PDI reads it back through the interface, 8 bytes a read.
+  pdi_write(0x0502, command(0x0100, 0x0C));
+  EXPECT_EQ(pdi16(0x0508), 0x0100);
+
+  // The master's command is ignored while the PDI holds the EEPROM (ESC datasheet 0x0502).
+  line.master->fpwr(kStation, 0x0502, command(0x0100, 0x08));
+  EXPECT_EQ(line.master->fprd16(kStation, 0x0508), 0x0100);  // still the PDI's data
+
+  pdi_write(0x0501, {0x00});  // released
+  EXPECT_EQ(line.master->sii_read_word(kStation, 0x0C), 0x0100);
+  EXPECT_EQ(line.master->sii_read_word(kStation, 0x08), kVendorId & 0xFFFF);
+}
+
+TEST_F(SiiPdiTest, PdiWriteWithoutWriteEnableIsRefused) {
+  line.master->fpwr8(kStation, 0x0500, 0x01);
+  pdi_write(0x0501, {0x01});
+  pdi_write(0x0508, bytes16(0xBEEF));
+  pdi_write(0x0502, command(0x0200, 0x70));
+  EXPECT_EQ(pdi16(0x0502) & 0x4000, 0x4000);
+  EXPECT_TRUE(line.app(0).eeprom_writes.empty());
+}
+
+TEST_F(SiiPdiTest, ForcingEcatAccessTakesTheEepromFromThePdi) {
+  line.master->fpwr8(kStation, 0x0500, 0x01);
+  pdi_write(0x0501, {0x01});
+  line.master->fpwr8(kStation, 0x0500, 0x02);  // SOEM's "EEPROM to master"
+  EXPECT_EQ(pdi8(0x0501), 0x00);
+  EXPECT_EQ(line.master->sii_read_word(kStation, 0x0A), kProductCode & 0xFFFF);
+  pdi_write_word(0x0C, 0xBEEF);
+  EXPECT_TRUE(line.app(0).eeprom_writes.empty());
+  EXPECT_EQ(line.master->sii_read_word(kStation, 0x0C), kRevision & 0xFFFF);
 }
 
 TEST_F(SiiTest, EveryWordReadsAsTheImage) {

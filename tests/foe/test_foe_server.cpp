@@ -26,6 +26,7 @@ class MemoryBackend : public FileBackend {
   uint32_t password = 0x12345678;
   int busy_polls = 0;  // how many times commit/poll_commit answer busy
   FoeError commit_error = FoeError::None;
+  FoeError begin_error = FoeError::None;  // begin_write refuses with it (after the password)
   int aborts = 0;
   int writes = 0;
   std::string open_name;
@@ -42,6 +43,7 @@ class MemoryBackend : public FileBackend {
   }
   FoeError begin_write(std::string_view name, uint32_t pw) override {
     if (pw != password) return FoeError::NoRights;
+    if (begin_error != FoeError::None) return begin_error;
     if (name.substr(0, 4) != "file") return FoeError::NotFound;
     open_name = std::string(name);
     pending.clear();
@@ -300,6 +302,44 @@ TEST_F(FoeServerTest, RequestShorterThanTheFoeHeaderIsReportedForAMailboxError) 
   const auto r = server.handle(five, kCapacity, reply);
   EXPECT_TRUE(r.too_short);
   EXPECT_EQ(r.length, 0u);
+}
+
+// Every FoE error code with its text (ETG.1000.6 §5.8, table of FoE error codes; 0x800C-0x8012
+// as SOEM and the ETG firmware-update practice name them): the write request the backend
+// refuses is answered by Error (OpCode 5), the code as UINT32 little-endian, then the text.
+TEST_F(FoeServerTest, EveryErrorCodeGoesOnTheWireWithItsText) {
+  struct Golden {
+    FoeError error;
+    Bytes reply;
+  };
+  const Golden table[] = {
+      {FoeError::NotDefined, cat({0x05, 0x00, 0x00, 0x80, 0x00, 0x00}, "Not defined")},
+      {FoeError::NotFound, cat({0x05, 0x00, 0x01, 0x80, 0x00, 0x00}, "Not found")},
+      {FoeError::AccessDenied, cat({0x05, 0x00, 0x02, 0x80, 0x00, 0x00}, "Access denied")},
+      {FoeError::DiskFull, cat({0x05, 0x00, 0x03, 0x80, 0x00, 0x00}, "Disk full")},
+      {FoeError::Illegal, cat({0x05, 0x00, 0x04, 0x80, 0x00, 0x00}, "Illegal")},
+      {FoeError::PacketNumberWrong,
+       cat({0x05, 0x00, 0x05, 0x80, 0x00, 0x00}, "Packet number wrong")},
+      {FoeError::AlreadyExists, cat({0x05, 0x00, 0x06, 0x80, 0x00, 0x00}, "Already exists")},
+      {FoeError::NoUser, cat({0x05, 0x00, 0x07, 0x80, 0x00, 0x00}, "No user")},
+      {FoeError::BootstrapOnly, cat({0x05, 0x00, 0x08, 0x80, 0x00, 0x00}, "Bootstrap only")},
+      {FoeError::NotBootstrap, cat({0x05, 0x00, 0x09, 0x80, 0x00, 0x00}, "Not Bootstrap")},
+      {FoeError::NoRights, cat({0x05, 0x00, 0x0A, 0x80, 0x00, 0x00}, "No rights")},
+      {FoeError::ProgramError, cat({0x05, 0x00, 0x0B, 0x80, 0x00, 0x00}, "Program Error")},
+      {FoeError::WrongChecksum, cat({0x05, 0x00, 0x0C, 0x80, 0x00, 0x00}, "Wrong checksum")},
+      {FoeError::FirmwareDoesNotFitHardware,
+       cat({0x05, 0x00, 0x0D, 0x80, 0x00, 0x00}, "Firmware does not fit for hardware")},
+      {FoeError::NoFileToRead, cat({0x05, 0x00, 0x0F, 0x80, 0x00, 0x00}, "No file to read")},
+      {FoeError::FileHeaderDoesNotExist,
+       cat({0x05, 0x00, 0x10, 0x80, 0x00, 0x00}, "File header does not exist")},
+      {FoeError::FlashProblem, cat({0x05, 0x00, 0x11, 0x80, 0x00, 0x00}, "Flash problem")},
+      {FoeError::FileIncompatible, cat({0x05, 0x00, 0x12, 0x80, 0x00, 0x00}, "File incompatible")},
+  };
+  for (const auto& g : table) {
+    backend.begin_error = g.error;
+    EXPECT_EQ(send(kWrqFileA, 64), g.reply) << static_cast<int>(g.error);
+    EXPECT_TRUE(server.idle());
+  }
 }
 
 TEST(FoeError, StandardTexts) {

@@ -126,8 +126,9 @@ def test_firmware_update_in_boot_reports_the_new_version_after_a_power_cycle(rac
 def test_device_reset_after_a_firmware_update_runs_the_new_version(rackcat, tmp_path):
     """The device reset 0xFBF0 (ETG.5003.1) restarts the firmware like a power cycle: after a
     foe_write in BOOT, back to PREOP still reports the old version; once the reset has run and
-    the master has scanned again, 0x100A, 0x1018:03 and 0x2000:02 report the new one (a version
-    text of another length than the old one: 0x100A is re-created)."""
+    the master has scanned again, 0x100A, 0x1018:03, 0x2000:02 and the SII revision (word 0x0C,
+    pysoem's slave.rev) report the new one (a version text of another length than the old one:
+    0x100A is re-created)."""
     fw = pack(tmp_path, "2.10.0-rc1", 0x00020100, "8c", b"new firmware")
     rc = rackcat()
     master = open_master(rc.iface)
@@ -140,6 +141,7 @@ def test_device_reset_after_a_firmware_update_runs_the_new_version(rackcat, tmp_
     s = master.slaves[0]
     assert sdo_text(s, 0x100A, 0) == "1.09.6"  # the old firmware runs until the reset
     assert sdo_u32(s, 0x1018, 3) == 0x00010009
+    assert s.rev == 0x00010009  # SII words 0x0C-0x0D as SOEM's scan read them
     s.sdo_write(0xFBF0, 1, b"teser\x00")
     deadline = time.monotonic() + 3.0
     while time.monotonic() < deadline:
@@ -153,6 +155,9 @@ def test_device_reset_after_a_firmware_update_runs_the_new_version(rackcat, tmp_
     s = master.slaves[0]
     assert sdo_text(s, 0x100A, 0) == "2.10.0-rc1"
     assert sdo_u32(s, 0x1018, 3) == 0x00020100
+    # The restarted firmware stored its SII image in the ESC's EEPROM through the PDI side of
+    # the EEPROM interface (ecat/slave/eeprom_store.cpp): config_init's SII read sees it.
+    assert s.rev == 0x00020100, hex(s.rev)
     assert sdo_text(s, 0x2000, 2) == "8c"
     enter_boot(s)
     assert s.foe_read(FW_NAME, FOE_PASSWORD, len(fw) + 1, FOE_TIMEOUT_US) == fw
