@@ -140,6 +140,8 @@ class Reader {
       fail(matches[1], "more than one <Device> matches " + describe_sel() + "; name the revision");
     vendor_ = root.child("Vendor");
     groups_ = root.child("Descriptions").child("Groups");
+    catalogue_ = root.child("Descriptions").child("Modules");
+    selector_ = &sel;
     return read_device(matches.front());
   }
 
@@ -238,6 +240,7 @@ class Reader {
     }
     for (auto p : dev.children("RxPdo")) d.rx_pdos.push_back(read_pdo(p, sm_nodes, d, out));
     for (auto p : dev.children("TxPdo")) d.tx_pdos.push_back(read_pdo(p, sm_nodes, d, out));
+    if (selector_->modules) apply_module_list(dev, out, *selector_->modules);
     check_sm_sizes(d, sm_nodes, dev);
     for (auto om : dev.child("Dc").children("OpMode")) {
       esi::DcOpModeDescription m;
@@ -254,7 +257,6 @@ class Reader {
       m.shift_time_sync1 = static_cast<int32_t>(child_number(om, "ShiftTimeSync1", 0));
       d.dc_modes.push_back(std::move(m));
     }
-    if (dev.child("Slots")) read_slots(dev, out);
     if (out.has_coe) complete_dictionary(out, dev);
     return out;
   }
@@ -624,7 +626,8 @@ class Reader {
   }
 
   coe::Object read_object(pugi::xml_node o) {
-    const auto index = child_number(o, "Index");
+    auto index = child_number(o, "Index");
+    if (o.child("Index").attribute("DependOnSlot").as_bool()) index += index_offset_;
     if (index <= 0 || index > 0xFFFF) fail(o, "object index out of range");
     std::string name = o.child("Name").text().get();
     auto type_node = o.child("Type");
@@ -690,9 +693,14 @@ class Reader {
   PdoDescription read_pdo(pugi::xml_node p, const std::vector<pugi::xml_node>& sm_nodes,
                           const DeviceDescription& d, EsiDevice& out) {
     PdoDescription pdo;
-    pdo.index = static_cast<uint16_t>(child_number(p, "Index"));
+    auto pdo_index = child_number(p, "Index");
+    if (p.child("Index").attribute("DependOnSlot").as_bool()) pdo_index += pdo_offset_;
+    if (pdo_index < 0 || pdo_index > 0xFFFF) fail(p, "PDO index out of range");
+    pdo.index = static_cast<uint16_t>(pdo_index);
     pdo.name = p.child("Name").text().get();
     pdo.fixed = p.attribute("Fixed").as_bool();
+    // ETG.2000 PdoType/@OverwrittenByModule: a device-level PDO a chosen module list replaces.
+    pdo.from_module = p.attribute("OverwrittenByModule").as_bool();
     pdo.mandatory = p.attribute("Mandatory").as_bool();
     pdo.assigned = static_cast<bool>(p.attribute("Sm"));
     const bool rx = std::string_view(p.name()) == "RxPdo";
@@ -714,7 +722,11 @@ class Reader {
     (void)sm_nodes;
     for (auto e : p.children("Entry")) {
       PdoEntryDescription en;
-      en.index = static_cast<uint16_t>(child_number(e, "Index"));
+      auto entry_index = child_number(e, "Index");
+      if (entry_index != 0 && e.child("Index").attribute("DependOnSlot").as_bool())
+        entry_index += index_offset_;
+      if (entry_index < 0 || entry_index > 0xFFFF) fail(e, "PDO entry index out of range");
+      en.index = static_cast<uint16_t>(entry_index);
       en.subindex = static_cast<uint8_t>(child_number(e, "SubIndex", 0));
       en.bit_length = static_cast<uint8_t>(child_number(e, "BitLen"));
       en.name = e.child("Name").text().get();
@@ -819,7 +831,13 @@ class Reader {
         fail(sm_nodes[i], "the PDOs assigned to Sm " + std::to_string(i) + " need " +
                               std::to_string(bytes) + " bytes, more than MaxSize " +
                               std::to_string(sm.max_size));
-      if (sm.default_size != 0 && sm.default_size != bytes)
+      if (sm.max_size != 0 && bytes > sm.max_size && module_choice_)
+        fail_choice(*module_choice_, "with the chosen modules the PDOs of Sm " + std::to_string(i) +
+                                         " need " + std::to_string(bytes) +
+                                         " bytes, more than its MaxSize " +
+                                         std::to_string(sm.max_size));
+      // The ESI's DefaultSize describes the default module configuration, not a chosen one.
+      if (sm.default_size != 0 && sm.default_size != bytes && !selector_->modules)
         fail(sm_nodes[i], "DefaultSize " + std::to_string(sm.default_size) + " of Sm " +
                               std::to_string(i) + " contradicts its PDOs (" +
                               std::to_string(bytes) + " bytes)");
@@ -828,11 +846,304 @@ class Reader {
     (void)dev;
   }
 
-  // ETG.5001 modular device: served as its device-level content describes it (Dictionary,
-  // PDOs and SMs of its default module configuration, as `rackcat esi` writes a rack); the
-  // <Slots>/<Modules> catalogue is not applied, so choosing another module list is not
-  // supported (docs/LINE.md).
-  void read_slots(pugi::xml_node dev, EsiDevice&) { (void)dev; }
+  // ---- modular devices (ETG.5001, ETG.2000 Slots/Modules) ------------------------------
+
+  [[noreturn]] void fail_choice(const ModuleChoice& c, const std::string& reason) const {
+    if (c.file.empty()) fail(catalogue_, "module \"" + c.ref + "\": " + reason);
+    throw FileError(c.file, c.line, reason);
+  }
+
+  // One <Slot> of the device (ETG.2000 SlotType): how many modules it takes, which, and the
+  // increments (the Slot's own attributes, else those of <Slots>).
+  struct SlotRule {
+    std::string name;
+    int64_t min = 0, max = 0;
+    int64_t index_increment = 0, pdo_increment = 0;
+    std::vector<uint32_t> idents;
+  };
+
+  std::vector<SlotRule> slot_rules(pugi::xml_node slots) const {
+    std::vector<SlotRule> rules;
+    const auto index_inc = attr_number(slots, "SlotIndexIncrement", 0);
+    const auto pdo_inc = attr_number(slots, "SlotPdoIncrement", 0);
+    for (auto s : slots.children("Slot")) {
+      SlotRule r;
+      r.name = s.child("Name").text().get();
+      if (r.name.empty()) r.name = "Slot " + std::to_string(rules.size() + 1);
+      r.min = attr_number(s, "MinInstances", 0);
+      r.max = attr_number(s, "MaxInstances", 0);
+      r.index_increment = attr_number(s, "SlotIndexIncrement", index_inc);
+      r.pdo_increment = attr_number(s, "SlotPdoIncrement", pdo_inc);
+      if (s.child("ModuleClass"))
+        fail(s.child("ModuleClass"), "<Slot> with <ModuleClass> is not supported (ModuleIdent)");
+      for (auto m : s.children("ModuleIdent"))
+        r.idents.push_back(static_cast<uint32_t>(number(m, m.text().get(), "ModuleIdent")));
+      rules.push_back(std::move(r));
+    }
+    return rules;
+  }
+
+  // The catalogue's <Module> a choice names: by ModuleIdent, by its Type text, or by one of
+  // the comma-separated names of its Type.
+  pugi::xml_node find_module(const ModuleChoice& c) const {
+    const auto ident =
+        parse_hex_dec(c.ref.size() > 2 && c.ref[0] == '0' && (c.ref[1] == 'x' || c.ref[1] == 'X')
+                          ? "#x" + c.ref.substr(2)
+                          : c.ref);
+    std::string known;
+    for (auto m : catalogue_.children("Module")) {
+      auto type = m.child("Type");
+      const std::string text = type.text().get();
+      if (ident && attr_number(type, "ModuleIdent", -1) == *ident) return m;
+      if (text == c.ref) return m;
+      for (size_t at = 0; at <= text.size();) {
+        size_t end = text.find(',', at);
+        if (end == std::string::npos) end = text.size();
+        std::string part = text.substr(at, end - at);
+        while (!part.empty() && part.front() == ' ') part.erase(part.begin());
+        while (!part.empty() && part.back() == ' ') part.pop_back();
+        if (!part.empty() && part == c.ref) return m;
+        at = end + 1;
+      }
+      if (known.size() < 200) known += (known.empty() ? "" : ", ") + text;
+    }
+    fail_choice(c, "unknown module \"" + c.ref + "\": the ESI's <Modules> have " +
+                       (known.empty() ? std::string("none") : known));
+  }
+
+  // Rewrites an ARRAY of unsigned values (0x1C12/0x1C13, 0xF030/0xF050) to hold `values`,
+  // keeping its name, type and access; grows it when its subindices do not suffice.
+  static void set_list(coe::ObjectDictionary& od, uint16_t index, const std::string& name,
+                       coe::DataType type, uint16_t bits, uint16_t access,
+                       const std::vector<uint32_t>& values, size_t capacity,
+                       const char* entry_name) {
+    const coe::Object* old = od.find(index);
+    std::vector<coe::Entry> entries;
+    if (old) {
+      for (const auto& e : old->entries()) entries.push_back(e);
+      capacity = std::max<size_t>(capacity, entries.size() - 1);
+    }
+    coe::Object o(index, old ? old->code() : coe::ObjectCode::Array, old ? old->name() : name,
+                  old ? old->data_type() : static_cast<uint16_t>(type));
+    coe::Entry sub0 =
+        old && !entries.empty()
+            ? entries[0]
+            : coe::make_entry(0, "Number of entries", coe::DataType::Unsigned8, 8, access);
+    sub0.default_value = {static_cast<uint8_t>(values.size())};
+    o.add(std::move(sub0));
+    for (size_t i = 1; i <= capacity; ++i) {
+      coe::Entry e =
+          i < entries.size()
+              ? entries[i]
+              : (entries.size() > 1 ? entries[1] : coe::make_entry(0, "", type, bits, access));
+      e.subindex = static_cast<uint8_t>(i);
+      if (i >= entries.size()) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, entry_name, static_cast<unsigned>(i));
+        e.name = buf;
+        e.bit_offset = 0;
+      }
+      const uint32_t v = i <= values.size() ? values[i - 1] : 0;
+      e.default_value.assign(e.byte_length(), 0);
+      for (size_t k = 0; k < e.default_value.size() && k < 4; ++k)
+        e.default_value[k] = static_cast<uint8_t>(v >> (8 * k));
+      o.add(std::move(e));
+    }
+    o.finalize();
+    od.remove(index);
+    od.add(std::move(o));
+  }
+
+  // A chosen module list (docs/LINE.md "Modular devices"): the device-level PDOs marked
+  // OverwrittenByModule and the device-level objects at any slot's module indices give way;
+  // each chosen module, at slot position k (0-based), adds its Dictionary objects and its
+  // RxPdo/TxPdo, a DependOnSlot index moved by k x SlotIndexIncrement (objects, PDO entries)
+  // or k x SlotPdoIncrement (PDOs) (ETG.2000 SlotType, ETG.5001.1 §4 index distance). The
+  // assignment 0x1C12/0x1C13 and the module ident lists 0xF030 (configured) / 0xF050
+  // (detected) then name the chosen modules (ETG.5001.1 §5.3).
+  void apply_module_list(pugi::xml_node dev, EsiDevice& out,
+                         const std::vector<ModuleChoice>& choices) {
+    auto& d = out.description;
+    auto& od = out.dictionary;
+    auto slots = dev.child("Slots");
+    if (!slots) {
+      if (!choices.empty()) fail_choice(choices.front(), "the device has no <Slots> (ETG.5001)");
+      fail(dev, "a module list for a device without <Slots>");
+    }
+    const auto rules = slot_rules(slots);
+    int64_t max_slots = attr_number(slots, "MaxSlotCount", 0);
+    if (max_slots == 0)
+      for (const auto& r : rules) max_slots += r.max;
+    max_slots = std::min<int64_t>(max_slots, 255);
+
+    // Place every choice: slots are filled in order, each up to MaxInstances; a module a slot
+    // does not take moves on to the next slot once this one has its MinInstances.
+    struct Placed {
+      pugi::xml_node module;
+      const ModuleChoice* choice;
+      int64_t index_offset, pdo_offset;
+    };
+    std::vector<Placed> placed;
+    size_t rule = 0;
+    int64_t in_rule = 0;
+    for (size_t k = 0; k < choices.size(); ++k) {
+      const auto& c = choices[k];
+      const auto module = find_module(c);
+      const auto ident = static_cast<uint32_t>(attr_number(module.child("Type"), "ModuleIdent", 0));
+      if (static_cast<int64_t>(k) >= max_slots)
+        fail_choice(c, "module " + std::to_string(k + 1) + " is more than the device's " +
+                           std::to_string(max_slots) + " slots (MaxSlotCount)");
+      const size_t first_rule = rule;
+      for (;;) {
+        if (rule >= rules.size()) {
+          const auto& r =
+              rules.empty() ? SlotRule{} : rules[std::min(first_rule, rules.size() - 1)];
+          std::string allowed;
+          for (auto i : r.idents) allowed += (allowed.empty() ? "" : ", ") + hex8(i);
+          fail_choice(c, "module " + hex8(ident) + " (" + module.child("Type").text().get() +
+                             ") is not allowed in slot position " + std::to_string(k + 1) +
+                             ": slot \"" + r.name + "\" takes " +
+                             (allowed.empty() ? std::string("no module") : allowed));
+        }
+        const auto& r = rules[rule];
+        const bool allowed = std::find(r.idents.begin(), r.idents.end(), ident) != r.idents.end();
+        if (allowed && in_rule < r.max) break;
+        if (in_rule < r.min) {
+          std::string list;
+          for (auto i : r.idents) list += (list.empty() ? "" : ", ") + hex8(i);
+          fail_choice(c, "module " + hex8(ident) + " (" + module.child("Type").text().get() +
+                             ") is not allowed in slot position " + std::to_string(k + 1) +
+                             ": slot \"" + r.name + "\" takes " + list + " and needs " +
+                             std::to_string(r.min) + " module(s)");
+        }
+        ++rule;
+        in_rule = 0;
+      }
+      const auto& r = rules[rule];
+      ++in_rule;
+      const auto pos = static_cast<int64_t>(k);
+      placed.push_back({module, &c, pos * r.index_increment, pos * r.pdo_increment});
+      out.module_idents.push_back(ident);
+    }
+    for (size_t r = rule; r < rules.size(); ++r) {
+      const int64_t have = r == rule ? in_rule : 0;
+      if (have < rules[r].min) {
+        const std::string reason = "slot \"" + rules[r].name + "\" needs at least " +
+                                   std::to_string(rules[r].min) + " module(s), the list gives " +
+                                   std::to_string(have);
+        if (!choices.empty()) fail_choice(choices.back(), reason);
+        fail(slots, reason);
+      }
+    }
+
+    // The device-level description of the default configuration gives way: PDOs marked
+    // OverwrittenByModule (their mapping objects kept aside: a module PDO with the same index
+    // and entries reuses the device's description of it) and objects at any module's slot
+    // indices.
+    std::map<uint16_t, coe::Object> mapping_aside;
+    for (auto* pdos : {&d.rx_pdos, &d.tx_pdos}) {
+      for (const auto& p : *pdos) {
+        if (!p.from_module) continue;
+        if (const auto* o = od.find(p.index)) {
+          mapping_aside.emplace(p.index, *o);
+          od.remove(p.index);
+        }
+      }
+      pdos->erase(std::remove_if(pdos->begin(), pdos->end(),
+                                 [](const PdoDescription& p) { return p.from_module; }),
+                  pdos->end());
+    }
+    std::set<int64_t> increments;
+    for (const auto& r : rules) increments.insert(r.index_increment);
+    for (auto m : catalogue_.children("Module"))
+      for (auto o : m.child("Profile").child("Dictionary").child("Objects").children("Object")) {
+        auto idx = o.child("Index");
+        if (!idx.attribute("DependOnSlot").as_bool()) continue;
+        const auto base = number(idx, idx.text().get(), "Index");
+        for (const auto inc : increments)
+          for (int64_t k = 0; k < max_slots && (inc != 0 || k == 0); ++k)
+            if (base + k * inc <= 0xFFFF) od.remove(static_cast<uint16_t>(base + k * inc));
+      }
+
+    std::set<uint16_t> from_modules;
+    const auto saved_types = types_;
+    for (const auto& p : placed) {
+      index_offset_ = p.index_offset;
+      pdo_offset_ = p.pdo_offset;
+      module_choice_ = p.choice;
+      types_ = saved_types;  // a module's DataTypes are its own (names repeat across modules)
+      auto dict = p.module.child("Profile").child("Dictionary");
+      for (auto t : dict.child("DataTypes").children("DataType")) {
+        const std::string name = t.child("Name").text().get();
+        if (name.empty()) fail(t, "<DataType> without <Name>");
+        types_[name] = t;
+      }
+      if (out.has_coe) {
+        for (auto o : dict.child("Objects").children("Object")) {
+          coe::Object obj = read_object(o);
+          const uint16_t index = obj.index();
+          if (from_modules.count(index)) {
+            if (o.child("Index").attribute("DependOnSlot").as_bool())
+              fail_choice(*p.choice, "module object " + hex4(index) +
+                                         " collides with an earlier module's (SlotIndexIncrement "
+                                         "too small for the module)");
+            continue;  // a module-independent object several modules declare: once
+          }
+          od.remove(index);  // the module defines what the device level described
+          od.add(std::move(obj));
+          from_modules.insert(index);
+        }
+      }
+      for (const char* kind : {"RxPdo", "TxPdo"}) {
+        const bool rx = kind[0] == 'R';
+        auto& pdos = rx ? d.rx_pdos : d.tx_pdos;
+        for (auto x : p.module.children(kind)) {
+          PdoDescription pdo = read_pdo(x, {}, d, out);
+          pdo.from_module = true;
+          for (const auto& q : pdos)
+            if (q.index == pdo.index)
+              fail_choice(*p.choice, std::string(kind) + " " + hex4(pdo.index) +
+                                         " of this module collides with another PDO "
+                                         "(SlotPdoIncrement too small for the module)");
+          if (auto it = mapping_aside.find(pdo.index);
+              it != mapping_aside.end() && !od.find(pdo.index)) {
+            const coe::Object& o = it->second;
+            bool same = o.sub0() == pdo.entries.size();
+            for (size_t i = 0; same && i < pdo.entries.size(); ++i) {
+              const auto& e = pdo.entries[i];
+              same = o.get_u(static_cast<uint8_t>(i + 1)) ==
+                     ((uint64_t{e.index} << 16) | (uint64_t{e.subindex} << 8) | e.bit_length);
+            }
+            if (same) od.add(it->second);
+          }
+          pdos.push_back(std::move(pdo));
+        }
+      }
+    }
+    types_ = saved_types;
+    index_offset_ = pdo_offset_ = 0;
+
+    if (!out.has_coe) return;
+    namespace acc = coe::access;
+    for (uint16_t assign : {uint16_t{0x1C12}, uint16_t{0x1C13}}) {
+      if (!od.find(assign)) continue;  // derived from the PDOs in complete_dictionary
+      std::vector<uint32_t> v;
+      for (const auto& q : assign == 0x1C12 ? d.rx_pdos : d.tx_pdos)
+        if (q.assigned) v.push_back(q.index);
+      set_list(od, assign, "", coe::DataType::Unsigned16, 16, acc::kRo, v, v.size(),
+               "SubIndex %03u");
+    }
+    set_list(od, 0xF030, "Configured Module Ident List", coe::DataType::Unsigned32, 32,
+             acc::kRoWrPreOp, out.module_idents, static_cast<size_t>(max_slots), "Module %u");
+    set_list(od, 0xF050, "Detected Module Ident List", coe::DataType::Unsigned32, 32, acc::kRo,
+             out.module_idents, out.module_idents.size(), "Module %u");
+  }
+
+  static std::string hex8(uint32_t v) {
+    char b[16];
+    std::snprintf(b, sizeof b, "0x%08X", v);
+    return b;
+  }
 
   // Adds what a CoE master reads that the Dictionary may leave out: 0x1000, 0x1008, 0x1018,
   // 0x1C00, mapping objects, 0x1C12/0x1C13, and the mapped application objects.
@@ -962,6 +1273,12 @@ class Reader {
   pugi::xml_node vendor_, groups_;
   std::map<std::string, pugi::xml_node> types_;
   std::vector<size_t> sm_map_;  // ESI Sm number -> emulated SM number
+  pugi::xml_node catalogue_;    // Descriptions/Modules
+  const DeviceSelector* selector_ = nullptr;
+  // While a chosen module is read: what its DependOnSlot indices move by (ETG.2000 Slots).
+  int64_t index_offset_ = 0;
+  int64_t pdo_offset_ = 0;
+  const ModuleChoice* module_choice_ = nullptr;  // the last module placed (for SM size errors)
 };
 
 }  // namespace

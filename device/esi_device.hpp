@@ -12,18 +12,32 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "coe/object_dictionary.hpp"
 #include "esi/device_description.hpp"
 
 namespace rackcat::device {
 
+// One module of a chosen module list (ETG.5001 modular device): its ModuleIdent ("0x0064E001",
+// "#x0064E001" or decimal) or its Module/Type text (or one of the comma-separated names in it,
+// "CRS-10" for "CRS-10, COO-11"). `file`/`line` say where the choice was written (the line
+// file), for the error an unknown or misplaced module gets.
+struct ModuleChoice {
+  std::string ref;
+  std::string file;
+  size_t line = 0;
+};
+
 // Which <Device> of the file: by its Type text or Name (exact), or by product code and, when
-// given, revision. An empty selector takes the file's only device.
+// given, revision. An empty selector takes the file's only device. `modules`, when set, fills
+// the device's <Slots> with these modules in order (slot position 1, 2, ...); without it a
+// modular device is served as its device-level content describes it.
 struct DeviceSelector {
   std::string name;
   std::optional<uint32_t> product_code;
   std::optional<uint32_t> revision;
+  std::optional<std::vector<ModuleChoice>> modules;
 
   static DeviceSelector named(std::string n) {
     DeviceSelector s;
@@ -41,8 +55,9 @@ struct DeviceSelector {
 struct EsiDevice {
   esi::DeviceDescription description;
   bool has_coe = false;
-  coe::ObjectDictionary dictionary;  // empty without CoE
-  std::string file;                  // where it came from (for messages)
+  coe::ObjectDictionary dictionary;     // empty without CoE
+  std::string file;                     // where it came from (for messages)
+  std::vector<uint32_t> module_idents;  // the chosen modules (0xF030/0xF050), slot order
 };
 
 // Parses `xml` (the content of `file`). Throws FileError naming the file and line of the first

@@ -67,8 +67,9 @@ struct Parser {
     for (const auto& d : devices) {
       if (!d.IsMap()) fail(d, "a device is a map with esi: or rack:");
       for (auto kv : d) {
-        static const std::set<std::string> known = {"esi",  "device", "product_code", "revision",
-                                                    "rack", "name",   "alias",        "count"};
+        static const std::set<std::string> known = {"esi",      "device", "product_code",
+                                                    "revision", "rack",   "name",
+                                                    "alias",    "count",  "modules"};
         if (!known.count(kv.first.Scalar()))
           fail(kv.first, "unknown device key \"" + kv.first.Scalar() + "\"");
       }
@@ -94,14 +95,25 @@ struct Parser {
         if (d["product_code"])
           sel.product_code = static_cast<uint32_t>(integer(d["product_code"], "product_code"));
         if (d["revision"]) sel.revision = static_cast<uint32_t>(integer(d["revision"], "revision"));
+        // ETG.5001 modular device: the modules in its slots, in order, by ModuleIdent or Type
+        // (device/esi_device.hpp ModuleChoice); each error names the list element's line.
+        if (const auto mods = d["modules"]) {
+          if (!mods.IsSequence()) fail(mods, "modules: is a list of module idents or types");
+          sel.modules.emplace();
+          for (const auto& m : mods) {
+            if (!m.IsScalar() || m.Scalar().empty())
+              fail(m, "a module is its ModuleIdent (0x0064E001) or its Type text");
+            sel.modules->push_back({m.Scalar(), file, static_cast<size_t>(m.Mark().line) + 1});
+          }
+        }
         const std::string esi_file = d["esi"].Scalar();
         const std::string xml = read(d["esi"], esi_file);
         esi_proto = std::make_unique<device::EsiDevice>(device::parse_esi_device(
             xml, (std::filesystem::path(root->path()) / esi_file).string(), sel));
         if (alias) esi_proto->description.config.station_alias = *alias;
       } else {
-        if (d["device"] || d["product_code"] || d["revision"])
-          fail(d, "device:/product_code:/revision: belong to an esi: device");
+        if (d["device"] || d["product_code"] || d["revision"] || d["modules"])
+          fail(d, "device:/product_code:/revision:/modules: belong to an esi: device");
         if (alias)
           fail(d["alias"], "alias: on a rack: device is not supported (set it in the rack)");
         const std::string rack_file = d["rack"].Scalar();

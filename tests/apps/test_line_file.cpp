@@ -61,6 +61,39 @@ TEST_F(LineFileTest, DevicesCountsAliasesWiring) {
   EXPECT_EQ(line.wiring[1].line, 7u);
 }
 
+// ETG.5001 modular device with the modules of its slots named in the line file.
+TEST_F(LineFileTest, ModularDeviceWithItsModules) {
+  auto line =
+      load_line_file(write("devices:\n"
+                           "  - esi: devices.xml\n"
+                           "    device: RC5001\n"
+                           "    modules: [RM-DO4, 0x00000001]\n"));
+  ASSERT_EQ(line.devices.size(), 1u);
+  EXPECT_EQ(line.devices[0].esi->module_idents, (std::vector<uint32_t>{2, 1}));
+  EXPECT_NE(line.devices[0].esi->dictionary.find(0x6010), nullptr);
+}
+
+TEST_F(LineFileTest, UnknownModuleNamesItsLine) {
+  expect_error(
+      "devices:\n"
+      "  - esi: devices.xml\n"
+      "    device: RC5001\n"
+      "    modules:\n"
+      "      - RM-DI4\n"
+      "      - RM-AI8\n",
+      6, "unknown module \"RM-AI8\"");
+}
+
+TEST_F(LineFileTest, ModuleNotAllowedInTheSlot) {
+  expect_error(
+      "devices:\n"
+      "  - esi: devices.xml\n"
+      "    device: RC5001\n"
+      "    modules:\n"
+      "      - RM-PS\n",
+      5, "is not allowed in slot position 1");
+}
+
 TEST_F(LineFileTest, MissingEsiDevice) {
   // The ESI's own error, naming the ESI file.
   const auto path = write("devices:\n  - {esi: devices.xml, device: NOPE}\n");

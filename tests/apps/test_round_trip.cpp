@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -57,14 +58,70 @@ class RoundTripTest : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
-void round_trip(const mdp::RackConfig& config, const std::string& state_dir) {
+// With `choose_modules`, the ESI is read with the rack's own module list (ETG.5001 Slots filled
+// from <Modules>, docs/LINE.md "Modular devices"); without, as its device-level description.
+void round_trip(const mdp::RackConfig& config, const std::string& state_dir,
+                bool choose_modules = false) {
   RackSlave native(config, state_dir, 0);
   const auto offline = offline_device(config);
   const coe::ObjectDictionary& native_od = offline->dictionary();
   const std::string xml = esi::write_esi(*offline);
-  device::EsiDevice esi = device::parse_esi_device(xml, "rack.xml", {});
+  device::DeviceSelector selector;
+  if (choose_modules) {
+    selector.modules.emplace();
+    for (const auto& m : config.modules) {
+      char ident[16];
+      std::snprintf(ident, sizeof ident, "0x%08X", m.card->module_ident);
+      selector.modules->push_back({ident, "rack.yaml", 1});
+    }
+  }
+  device::EsiDevice esi = device::parse_esi_device(xml, "rack.xml", selector);
+  if (choose_modules) {
+    ASSERT_EQ(esi.module_idents.size(), config.modules.size());
+    for (size_t i = 0; i < config.modules.size(); ++i)
+      EXPECT_EQ(esi.module_idents[i], config.modules[i].card->module_ident);
+  }
   // The serial number is the rack's position in the segment, not part of the ESI.
   esi.description.serial = config.control.serial;
+  // An ETG.5001 module is described once for every slot it may sit in, so what differs between
+  // two instances of it cannot be in the ESI: the module information 0x3nn1 (card type of the
+  // idents several cards share, RIM, slot, channel range) and the like. With a module list the
+  // copy's modules carry the catalogue's values there; the test gives them the rack's and counts
+  // them (docs/LINE.md "Round trip"): everything else must already be equal.
+  size_t instance_values = 0;
+  if (choose_modules) {
+    native_od.for_each([&](const coe::Object& n) {
+      if (n.index() <= 0x3000 || n.index() > 0x9FFF) return;  // module objects only
+      coe::Object* c = esi.dictionary.find(n.index());
+      ASSERT_NE(c, nullptr) << "module object 0x" << std::hex << n.index() << " missing";
+      bool changed = false;
+      for (const auto& e : n.entries()) {
+        const coe::Entry* ce = c->entry(e.subindex);
+        if (ce == nullptr || e.padding) continue;
+        std::vector<uint8_t> want(e.byte_length());
+        if (e.bit_offset % 8 == 0 && e.bit_length % 8 == 0) {
+          const auto b = n.bytes(e.subindex);
+          want.assign(b.begin(), b.end());
+        } else {
+          const uint64_t v = n.get_u(e.subindex);
+          for (size_t k = 0; k < want.size() && k < 8; ++k)
+            want[k] = static_cast<uint8_t>(v >> (8 * k));
+        }
+        const auto have = c->bytes(e.subindex);
+        if (e.bit_offset % 8 == 0 && e.bit_length % 8 == 0
+                ? std::equal(want.begin(), want.end(), have.begin(), have.end())
+                : c->get_u(e.subindex) == n.get_u(e.subindex))
+          continue;
+        // Only the module information 0x3nn1 (guide §2.3 Table 6) is per instance.
+        EXPECT_EQ(n.index() & 0xF00F, 0x3001)
+            << "0x" << std::hex << n.index() << ":" << int(e.subindex) << " differs";
+        c->set_default(e.subindex, want);
+        changed = true;
+        ++instance_values;
+      }
+      if (changed) c->load_defaults();
+    });
+  }
   device::GenericDevice copy(std::move(esi));
   const coe::ObjectDictionary& copy_od = copy.esi().dictionary;
   size_t renamed = 0;
@@ -140,8 +197,8 @@ void round_trip(const mdp::RackConfig& config, const std::string& state_dir) {
   EXPECT_GT(entries, indices.size());
   std::printf(
       "round trip: %zu objects, %zu entry descriptions equal (%zu array elements but "
-      "for their names)\n",
-      indices.size(), entries, renamed);
+      "for their names; %zu module instance values)\n",
+      indices.size(), entries, renamed, instance_values);
 }
 
 TEST_F(RoundTripTest, TinyRack) {
@@ -152,6 +209,17 @@ TEST_F(RoundTripTest, DefaultRack) {
   auto config = load_rack_or_report("");
   ASSERT_TRUE(config.has_value());
   round_trip(*config, dir_.string());
+}
+
+TEST_F(RoundTripTest, TinyRackWithItsModuleList) {
+  round_trip(mdp::load_rack_config(RACKCAT_SOURCE_DIR "/examples/tiny-rack.yaml"), dir_.string(),
+             true);
+}
+
+TEST_F(RoundTripTest, DefaultRackWithItsModuleList) {
+  auto config = load_rack_or_report("");
+  ASSERT_TRUE(config.has_value());
+  round_trip(*config, dir_.string(), true);
 }
 
 }  // namespace

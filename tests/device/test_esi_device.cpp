@@ -147,6 +147,75 @@ TEST(EsiDevice, ModularDeviceAsItsDeviceLevelDescription) {
   EXPECT_TRUE(dev.description.tx_pdos.empty());
 }
 
+// ETG.5001 with a chosen module list: each module's objects and PDOs at its slot position
+// (SlotIndexIncrement 0x10, SlotPdoIncrement 1), the ident lists 0xF030/0xF050 naming them.
+DeviceSelector with_modules(std::vector<std::string> refs) {
+  DeviceSelector s = DeviceSelector::named("RC5001");
+  s.modules.emplace();
+  size_t line = 10;
+  for (auto& r : refs) s.modules->push_back({r, "line.yaml", line++});
+  return s;
+}
+
+TEST(EsiDevice, ModularDeviceWithChosenModules) {
+  const auto dev = load_esi_device(kFile, with_modules({"RM-DI4", "0x00000002", "#x1"}));
+  ASSERT_EQ(dev.module_idents, (std::vector<uint32_t>{1, 2, 1}));
+  ASSERT_EQ(dev.description.tx_pdos.size(), 2u);
+  EXPECT_EQ(dev.description.tx_pdos[0].index, 0x1A00);
+  EXPECT_EQ(dev.description.tx_pdos[1].index, 0x1A02);
+  EXPECT_EQ(dev.description.tx_pdos[1].entries[0].index, 0x6020);
+  ASSERT_EQ(dev.description.rx_pdos.size(), 1u);
+  EXPECT_EQ(dev.description.rx_pdos[0].index, 0x1601);
+  EXPECT_EQ(dev.description.rx_pdos[0].entries[3].index, 0x7010);
+  const auto& od = dev.dictionary;
+  EXPECT_NE(od.find(0x6000), nullptr);
+  EXPECT_NE(od.find(0x7010), nullptr);
+  EXPECT_NE(od.find(0x6020), nullptr);
+  EXPECT_EQ(od.find(0x6010), nullptr);
+  EXPECT_EQ(od.find(0x7000), nullptr);
+  for (uint16_t list : {uint16_t{0xF030}, uint16_t{0xF050}}) {
+    const auto* o = od.find(list);
+    ASSERT_NE(o, nullptr);
+    EXPECT_EQ(o->sub0(), 3);
+    EXPECT_EQ(o->get_u(1), 1u);
+    EXPECT_EQ(o->get_u(2), 2u);
+    EXPECT_EQ(o->get_u(3), 1u);
+  }
+  const auto* assign = od.find(0x1C13);
+  ASSERT_NE(assign, nullptr);
+  EXPECT_EQ(assign->sub0(), 2);
+  EXPECT_EQ(assign->get_u(2), 0x1A02u);
+  // SII: SM2 one byte of outputs, SM3 two bytes of inputs.
+  EXPECT_EQ(dev.description.sms[2].default_size, 1);
+  EXPECT_EQ(dev.description.sms[3].default_size, 2);
+}
+
+void expect_module_error(std::vector<std::string> refs, size_t line, const std::string& part) {
+  try {
+    load_esi_device(kFile, with_modules(std::move(refs)));
+    FAIL() << "expected an error containing " << part;
+  } catch (const FileError& e) {
+    EXPECT_EQ(e.file(), "line.yaml") << e.what();
+    EXPECT_EQ(e.line(), line) << e.what();
+    EXPECT_NE(e.reason().find(part), std::string::npos) << e.what();
+  }
+}
+
+TEST(EsiDeviceErrors, UnknownModule) {
+  expect_module_error({"RM-DI4", "RM-AI8"}, 11, "unknown module \"RM-AI8\"");
+}
+
+TEST(EsiDeviceErrors, ModuleNotAllowedInItsSlot) {
+  expect_module_error({"RM-PS"}, 10,
+                      "module 0x00000003 (RM-PS) is not allowed in slot position 1: slot "
+                      "\"Slot\" takes 0x00000001, 0x00000002");
+}
+
+TEST(EsiDeviceErrors, MoreModulesThanSlots) {
+  expect_module_error({"RM-DI4", "RM-DI4", "RM-DI4", "RM-DI4", "RM-DO4"}, 14,
+                      "more than the device's 4 slots");
+}
+
 TEST(EsiDeviceErrors, NotXml) {
   expect_error("<EtherCATInfo>\n<Vendor>", 2, "not well-formed");
 }
