@@ -94,10 +94,12 @@ class DictionaryWriter {
     objects_ = dictionary.append_child("Objects");
   }
 
-  void write_all() {
+  // `skip`: objects described elsewhere (a module's objects at device level).
+  void write_all(const std::set<uint16_t>* skip = nullptr) {
     // Enumeration objects (0x0800..0x0FFF) are data types: the ESI carries them once, as the
     // DataType with EnumInfo their users declare, not as Objects.
     od_.for_each([&](const coe::Object& obj) {
+      if (skip != nullptr && skip->count(obj.index()) != 0) return;
       if (!coe::is_enum_type(obj.index())) write_object(obj);
     });
   }
@@ -298,11 +300,12 @@ class DictionaryWriter {
 };
 
 pugi::xml_node write_profile(pugi::xml_node parent, const char* element,
-                             const coe::ObjectDictionary& od, bool depend_on_slot) {
+                             const coe::ObjectDictionary& od, bool depend_on_slot,
+                             const std::set<uint16_t>* skip = nullptr) {
   auto profile = parent.append_child(element);
   // ETG.5001: a modular device announces profile 5001.
   profile.append_child("ProfileNo").text().set(5001);
-  DictionaryWriter(profile.append_child("Dictionary"), od, depend_on_slot).write_all();
+  DictionaryWriter(profile.append_child("Dictionary"), od, depend_on_slot).write_all(skip);
   return profile;
 }
 
@@ -489,7 +492,9 @@ std::string write_esi(const EsiContent& c) {
     mbx_timeout.append_child("ResponseTimeout").text().set(d.timeouts.mailbox_response);
   }
   text_child(device, "GroupType", d.group_type);
-  auto device_profile = write_profile(device, "Profile", *c.dictionary, false);
+  // Module objects are defined once, in their <Module> (ETG.5001; a configurator that fills the
+  // slots offline adds them per slot): the device level carries the device's own objects.
+  auto device_profile = write_profile(device, "Profile", *c.dictionary, false, &c.module_objects);
   if (d.coe.diag_history && c.dictionary->find(coe::diag::kIndex)) {
     write_diag_messages(device_profile);
   }

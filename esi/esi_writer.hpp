@@ -1,11 +1,13 @@
 // The ETG.2000 EtherCAT Slave Information (ESI) file of the device, written with pugixml from
 // the same DeviceDescription as the SII image and from the live object dictionary: the device
-// dictionary holds every object of the running device, the RxPdo/TxPdo elements every mapping
-// object with its Sm assignment, and the ETG.5001 modular part (Slots, Modules) lets a
+// dictionary holds the device's own objects (module objects are defined once, in their
+// Module), the RxPdo/TxPdo elements every mapping object with its Sm assignment (a slot's PDO
+// marked OverwrittenByModule), and the ETG.5001 modular part (Slots, Modules) lets a
 // configuration tool build any rack offline.
 #pragma once
 
 #include <cstdint>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,9 @@ struct EsiContent {
   size_t eeprom_bytes = 0;                 // SII image size
   std::vector<ModuleDescription> modules;  // empty: no Slots/Modules elements
   SlotRules slots;
+  // Objects of the device's modules: defined in their <Module> (ETG.5001), so the device-level
+  // Dictionary leaves them out and a configurator filling the slots gets each once.
+  std::set<uint16_t> module_objects;
 };
 
 // The ESI document as UTF-8 XML text.

@@ -188,6 +188,11 @@ std::string write_esi(const mdp::Device& device) {
   c.config_data = encode_config_area(d.config);
   c.eeprom_bytes = sii.bytes.size();
   c.modules = describe_module_types();
+  for (const auto& m : device.modules()) {
+    device.dictionary().for_each([&](const coe::Object& obj) {
+      if (belongs_to_module(obj.index(), m.nn())) c.module_objects.insert(obj.index());
+    });
+  }
   c.slots.max_slots = mdp::kMaxModules;
   c.slots.index_increment = mdp::kIndexDistance;
   c.slots.pdo_increment = mdp::sm::kPdoIndexIncrement;

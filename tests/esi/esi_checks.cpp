@@ -66,7 +66,8 @@ std::string validate_with_xmllint(const std::string& xml, const std::string& nam
   return fmt::format("xmllint exit {}: {}", WEXITSTATUS(status), output);
 }
 
-void expect_dictionary_matches(const pugi::xml_node& device, const coe::ObjectDictionary& od) {
+void expect_dictionary_matches(const pugi::xml_node& device, const coe::ObjectDictionary& od,
+                               const std::set<uint16_t>& in_modules) {
   auto dict = device.child("Profile").child("Dictionary");
   ASSERT_TRUE(dict) << "no Device/Profile/Dictionary";
   std::map<std::string, pugi::xml_node> types;
@@ -141,6 +142,11 @@ void expect_dictionary_matches(const pugi::xml_node& device, const coe::ObjectDi
     // Enumeration objects (0x0800..0x0FFF) are data types in the ESI, declared with EnumInfo
     // where an entry uses them (ETG.2000 §5.4.3), not Objects.
     if (coe::is_enum_type(obj.index())) return;
+    if (in_modules.count(obj.index()) != 0) {
+      EXPECT_FALSE(in_esi.count(obj.index()))
+          << fmt::format("module object 0x{:04X} also at device level", obj.index());
+      return;
+    }
     EXPECT_TRUE(in_esi.count(obj.index()))
         << fmt::format("dictionary object 0x{:04X} missing in the ESI", obj.index());
   });

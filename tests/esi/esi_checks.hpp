@@ -3,6 +3,7 @@
 #pragma once
 
 #include <pugixml.hpp>
+#include <set>
 #include <string>
 
 #include "coe/object_dictionary.hpp"
@@ -18,7 +19,9 @@ std::string validate_with_xmllint(const std::string& xml, const std::string& nam
 // Adds a GoogleTest failure for every object, entry, PDO or SM where `device` (the ESI
 // <Device> element) and `od`/`description` disagree, or where the ESI has something the
 // dictionary does not.
-void expect_dictionary_matches(const pugi::xml_node& device, const coe::ObjectDictionary& od);
+// `in_modules`: objects defined in the ESI's <Module>s, not at device level (ETG.5001).
+void expect_dictionary_matches(const pugi::xml_node& device, const coe::ObjectDictionary& od,
+                               const std::set<uint16_t>& in_modules = {});
 void expect_pdos_and_sms_match(const pugi::xml_node& device, const DeviceDescription& d);
 
 }  // namespace rackcat::esi::testing
