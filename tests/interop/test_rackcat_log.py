@@ -3,15 +3,17 @@ every ESM transition with the master's AL control, a refused transition with its
 and meaning (an SM2 length that no longer matches the PDO assignment: 0x001D, ETG.1000.6 Table
 11), and a master that stops sending in OP: the process-data watchdog expiry and the fall to
 SAFEOP with 0x001B (ETG.1000.4 §6.5.3). The same events as JSON lines with --log-format json.
+SDO aborts (at most 10 a second, the rest counted in the next line), injected faults, RIM state
+changes and parameter stores in the text log.
 
-Needs root (network namespace, veth, raw sockets); skips otherwise. About 10 s.
+Needs root (network namespace, veth, raw sockets); skips otherwise. About 14 s.
 """
 import json
 import re
 import struct
 import time
 
-from rackcat_helpers import cycle, go, open_master, pysoem, rackcat, to_op
+from rackcat_helpers import cycle, go, open_master, pysoem, rackcat, store_parameters, to_op
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -92,3 +94,39 @@ def test_the_same_events_as_json_lines(rackcat):
     assert ("esm_error", "OP", "SAFEOP", 0x001B) in kinds, kinds
     for e in events:
         assert {"time", "level", "msg"} <= e.keys(), e
+
+
+SOUT = 1  # default rack: CDO-10 16xDout Source (detects wiring faults, guide 4.7)
+
+
+def test_aborts_faults_rim_states_and_stores_in_the_log(rackcat):
+    rc = rackcat(pcap=False, extra=("--log-level", "info"))
+    master = open_master(rc.iface)
+    try:
+        s = master.slaves[0]
+        # A burst of SDO aborts (object does not exist, 0x06020000): logged at most 10 a second.
+        for _ in range(25):
+            try:
+                s.sdo_read(0x5FFF, 0)
+                raise AssertionError("0x5FFF exists")
+            except pysoem.SdoError:
+                pass
+        time.sleep(1.1)  # the next second: the next abort says how many were not logged
+        try:
+            s.sdo_read(0x5FFF, 0)
+        except pysoem.SdoError:
+            pass
+        assert store_parameters(s) == 0  # 0xFBF2 "save"
+    finally:
+        master.close()
+    rc.cli("wiring-fault", "--module", SOUT, "--channel", 3, "--fault", "unsafe")
+    rc.cli("unplug", "--rim", 2)
+    abort = r" info: SDO abort 0x5FFF:00: 0x06020000 \(The object does not exist in the object " \
+            r"dictionary\)"
+    wait_for(rc, abort + r" \(\d+ more not logged\)$")
+    aborts = [line for line in rc.log().splitlines() if re.search(abort, line)]
+    assert 2 <= len(aborts) <= 21, aborts  # at most 10 a second of the 26
+    wait_for(rc, r" info: fault injected: module 1 channel 3 wiring fault unsafe "
+                 r"\(short to supply\)")
+    wait_for(rc, r" warning: RIM 2 ONLINE -> OFFLINE$")
+    wait_for(rc, r" info: store parameters: done$")
