@@ -80,6 +80,15 @@ class ControlApi:
         """The exception tree (guide §4.7)."""
         return self.get("/api/exceptions")
 
+    def diagnosis(self) -> Json:
+        """The diagnosis history 0x10F3 (ETG.1020 §13): its flags and every stored message,
+        newest first, with its code, type, time, module/channel and text."""
+        return self.get("/api/diagnosis")
+
+    def diagnosis_messages(self) -> List[Json]:
+        """Only the messages of the diagnosis history, newest first."""
+        return list(self.diagnosis()["messages"])
+
     # --- fault injection ----------------------------------------------------------------------
     def set_channel(self, module: int, channel: int, value: Union[int, float]) -> Json:
         """A constant input value on one channel."""

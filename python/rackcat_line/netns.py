@@ -16,9 +16,11 @@ def _ip(*args: str, check: bool = True) -> subprocess.CompletedProcess[str]:
 
 
 class Namespace:
-    def __init__(self, slave_iface: str = "ecat-slave") -> None:
+    """Use create()/destroy(), or the namespace as a context manager."""
+
+    def __init__(self, slave_iface: str = "ecat-slave", prefix: str = "rackcat-line") -> None:
         tag = f"{os.getpid() % 100000}x{next(_counter)}"
-        self.name = f"rackcat-line-{tag}"
+        self.name = f"{prefix}-{tag}"
         self.slave_iface = slave_iface
         self.master_iface = f"rcm{tag}"[:15]
         self._peer = f"rcs{tag}"[:15]
@@ -30,14 +32,27 @@ class Namespace:
         _ip("link", "add", self.master_iface, "type", "veth", "peer", "name", self._peer)
         _ip("link", "set", self._peer, "netns", self.name)
         _ip("-n", self.name, "link", "set", self._peer, "name", self.slave_iface)
-        for args in (["-n", self.name, "link", "set", self.slave_iface, "up"],
-                     ["-n", self.name, "link", "set", "lo", "up"],
-                     ["link", "set", self.master_iface, "up"]):
-            _ip(*args)
-        for where, iface in ((["ip", "netns", "exec", self.name], self.slave_iface), ([],
-                                                                                     self.master_iface)):
+        # No IPv6 chatter (router solicitations) on the wire, from before the links are up: a
+        # capture of the line holds EtherCAT frames only.
+        for where, iface in ((["ip", "netns", "exec", self.name], self.slave_iface),
+                             ([], self.master_iface)):
             subprocess.run([*where, "sysctl", "-qw", f"net.ipv6.conf.{iface}.disable_ipv6=1"],
                            check=False, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        for args in (["link", "set", self.master_iface, "up"],
+                     ["-n", self.name, "link", "set", self.slave_iface, "up"],
+                     ["-n", self.name, "link", "set", "lo", "up"]):
+            _ip(*args)
+
+    def __enter__(self) -> "Namespace":
+        try:
+            self.create()
+        except BaseException:
+            self.destroy()
+            raise
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.destroy()
 
     def exec_prefix(self) -> List[str]:
         return ["ip", "netns", "exec", self.name]

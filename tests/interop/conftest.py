@@ -16,7 +16,6 @@ build directory (default: build).
 
 Everything here needs root (netns, veth, raw sockets); the tests skip with a message otherwise.
 """
-import itertools
 import os
 import select
 import shlex
@@ -25,12 +24,18 @@ import signal
 import socket
 import struct
 import subprocess
+import sys
 import time
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
+try:  # installed into .venv by scripts/setup.sh (pip install -e python)
+    from rackcat_line.netns import Namespace
+except ImportError:  # pure Python: the checkout's copy serves as well
+    sys.path.insert(0, str(REPO / "python"))
+    from rackcat_line.netns import Namespace
 BUILD = Path(os.environ.get("RACKCAT_BUILD_DIR", REPO / "build"))
 if not BUILD.is_absolute():
     BUILD = REPO / BUILD
@@ -41,7 +46,6 @@ DEFAULT_SLAVE_CMD = TEST_SLAVE_CMD
 # The rackcat_line fixture (python/, the master developers' package) runs this build's rackcat.
 os.environ.setdefault("RACKCAT_BIN", str(BUILD / "rackcat"))
 ETHERTYPE_ECAT = 0x88A4
-_counter = itertools.count()
 
 
 def pytest_addoption(parser):
@@ -65,47 +69,13 @@ def require_root():
         pytest.skip("wire interop tests need iproute2 ('ip'); run scripts/setup.sh")
 
 
-class VethNamespace:
-    """A private namespace with the slave end of a veth pair; the master end stays here."""
+class VethNamespace(Namespace):
+    """A private namespace with the slave end of a veth pair; the master end stays here. The
+    master developers' package (python/rackcat_line, rackcat_line.netns) makes it: the project's
+    interop tests are that package's test (issue 23)."""
 
     def __init__(self):
-        n = next(_counter)
-        tag = f"{os.getpid() % 100000}x{n}"
-        self.name = f"rackcat-it-{tag}"
-        self.slave_iface = "ecat-slave"
-        self.master_iface = f"rcm{tag}"[:15]
-        self._created = False
-
-    def __enter__(self):
-        peer = f"rcs{self.master_iface[3:]}"[:15]
-        _run("ip", "netns", "add", self.name)
-        self._created = True
-        _run("ip", "link", "add", self.master_iface, "type", "veth", "peer", "name", peer)
-        _run("ip", "link", "set", peer, "netns", self.name)
-        _run("ip", "-n", self.name, "link", "set", peer, "name", self.slave_iface)
-        # No IPv6 chatter (router solicitations) on the wire: the captures stay EtherCAT.
-        _run("sysctl", "-qw", f"net.ipv6.conf.{self.master_iface}.disable_ipv6=1", check=False)
-        _run(*self.exec_prefix(), "sysctl", "-qw",
-             f"net.ipv6.conf.{self.slave_iface}.disable_ipv6=1", check=False)
-        _run("ip", "link", "set", self.master_iface, "up")
-        _run("ip", "-n", self.name, "link", "set", self.slave_iface, "up")
-        _run("ip", "-n", self.name, "link", "set", "lo", "up")
-        return self
-
-    def exec_prefix(self):
-        return ["ip", "netns", "exec", self.name]
-
-    def __exit__(self, *exc):
-        if not self._created:
-            return
-        pids = _run("ip", "netns", "pids", self.name, check=False).stdout.split()
-        for pid in pids:
-            try:
-                os.kill(int(pid), signal.SIGKILL)
-            except (ProcessLookupError, ValueError):
-                pass
-        _run("ip", "link", "del", self.master_iface, check=False)
-        _run("ip", "netns", "del", self.name, check=False)
+        super().__init__(prefix="rackcat-it")
 
 
 def probe_brd(iface, timeout_s=10.0):

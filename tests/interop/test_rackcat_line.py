@@ -1,6 +1,8 @@
 """The master developers' package (python/rackcat_line) as a master developer uses it: its
 pytest fixture starts rackcat on a virtual line, pysoem drives the slave to OP on the handed
-interface, and the control API calls change what the master sees."""
+interface, and the control API calls change what the master sees and read the diagnosis
+history. (The other interop tests use the package too: conftest.VethNamespace is its
+rackcat_line.netns.Namespace.)"""
 import time
 
 import pytest
@@ -43,6 +45,11 @@ def test_fixture_line_reaches_op_and_control_api_acts(rackcat_line):
             master.receive_processdata(2000)
             time.sleep(0.001)
         rackcat_line.control.replug_rim(2)
+        # An unsafe wiring fault on CDO-10 (module 1) channel 3 is in the diagnosis history.
+        rackcat_line.control.wiring_fault(module=1, channel=3, fault="unsafe")
+        messages = rackcat_line.control.diagnosis_messages()
+        assert any(m["module"] == 1 and m["channel"] == 3 and m["type"] == "error"
+                   for m in messages), messages
     finally:
         master.close()
     time.sleep(0.1)
