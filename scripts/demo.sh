@@ -64,7 +64,10 @@ sleep 0.5
 if ! kill -0 "$SLAVE" 2>/dev/null; then cat "$STATE/rackcat.log"; exit 1; fi
 
 echo "== master: pysoem $("$PY" -c 'import pysoem; print(pysoem.__version__)') on ecat-master"
-ip netns exec "$NS" "$PY" scripts/demo_master.py ecat-master --seconds "$SECONDS_LIVE"
+status=0
+ip netns exec "$NS" "$PY" scripts/demo_master.py ecat-master --seconds "$SECONDS_LIVE" || status=$?
 kill -INT "$SLAVE"; wait "$SLAVE" || true
 echo "== rackcat said:"
 sed 's/^/   /' "$STATE/rackcat.log" | tail -n 20
+[ "$status" -eq 0 ] || echo "demo: the master saw a problem (exit $status, see above)" >&2
+exit "$status"

@@ -125,7 +125,7 @@ def main():
         go(master, pysoem.OP_STATE)
 
         expected = master.expected_wkc
-        cycles = bad = 0
+        cycles = bad = lost = 0
         end = time.monotonic() + args.seconds
         next_print = 0.0
         print(f"live process data (expected WKC {expected}):")
@@ -135,7 +135,9 @@ def main():
             master.send_processdata()
             wkc = master.receive_processdata(2000)
             cycles += 1
-            if wkc != expected:
+            if wkc < 0:
+                lost += 1  # no reply within SOEM's 2 ms: timing (a busy machine), not an answer
+            elif wkc != expected:
                 bad += 1
             now = time.monotonic()
             if now >= next_print:
@@ -143,11 +145,17 @@ def main():
                       f"in {slave.input[:16].hex(' ')}")
                 next_print = now + 0.5
             time.sleep(args.cycle_ms / 1000.0)
-        print(f"  {cycles} cycles, {bad} with a wrong working counter")
+        print(f"  {cycles} cycles, {bad} with a wrong working counter, {lost} without a reply "
+              f"within 2 ms")
+        # A reply with a wrong working counter is a fault; a late reply is the machine's load
+        # (the tests measure timing, docs/PERFORMANCE.md), unless it is more than 1 in 100.
+        late = lost * 100 > cycles
+        if lost and not late:
+            print("  (late replies: the machine was busy; scripts/test.sh measures timing)")
         print("back to INIT:")
         go(master, pysoem.SAFEOP_STATE)
         go(master, pysoem.INIT_STATE)
-        return 0 if bad == 0 else 1
+        return 0 if bad == 0 and not late else 1
     finally:
         master.close()
 

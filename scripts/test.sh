@@ -66,6 +66,9 @@ do_pysoem() {
   # pytest exits 5 when it collected no test at all: that is a failure here too.
   "$PY" -m pytest -q tests/interop -p no:cacheprovider
 }
+# The README's first command, as a new user runs it (setup --demo and the build are no-ops by
+# now): the default rack to OP under pysoem from this checkout's path.
+do_demo() { bash scripts/demo.sh --seconds 2; }
 do_ethercrab() {
   bash scripts/ethercrab_interop.sh
   # the user's own line (docs/LINE.md): coupler, DI, DO, CoE terminal, rack; DO->DI wired
@@ -96,6 +99,7 @@ step "clang-tidy" do_tidy
 step "web page: lint, types, unit tests" do_web
 if [ "${SKIP_INTEROP:-0}" != 1 ]; then
   step "interop: pysoem over veth" do_pysoem
+  step "demo (README's first command)" do_demo
   [ -f scripts/ethercrab_interop.sh ] && step "interop: ethercrab over veth" do_ethercrab
   step "interop: conformance matrix" do_conformance
 fi

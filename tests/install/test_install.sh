@@ -1,6 +1,7 @@
 #!/bin/sh
 # Installs the build into a fresh prefix and builds against the installed package as a user
-# would: tests/install/coe_only (COMPONENTS coe must find no other package) and the example
+# would: tests/install/coe_only (COMPONENTS coe must find no other package),
+# tests/install/coe_mdp (COMPONENTS coe mdp: no ESC, modules or ESI) and the example
 # device examples/tiny_device (coe, esi, ecat_host). tests/interop/test_tiny_device.py then
 # takes that device to OP under pysoem.
 #
@@ -26,7 +27,7 @@ bash -n "$prefix/share/bash-completion/completions/rackcat"
 
 launcher=""
 if command -v ccache >/dev/null 2>&1; then launcher="-DCMAKE_CXX_COMPILER_LAUNCHER=ccache"; fi
-for project in "$src/tests/install/coe_only" "$src/examples/tiny_device"; do
+for project in "$src/tests/install/coe_only" "$src/tests/install/coe_mdp" "$src/examples/tiny_device"; do
   name=$(basename "$project")
   echo "== $name against the installed package"
   # shellcheck disable=SC2086
@@ -36,4 +37,5 @@ for project in "$src/tests/install/coe_only" "$src/examples/tiny_device"; do
   cmake --build "$work/$name" >"$work/$name.build.log" || { cat "$work/$name.build.log"; exit 1; }
 done
 "$work/coe_only/coe_only"
+"$work/coe_mdp/coe_mdp"
 echo "ok: $work/tiny_device/tiny_device"

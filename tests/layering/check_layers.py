@@ -65,6 +65,7 @@ RULES = {
     "tests/can_vm": MDP + ["modules/", "tests/can_vm/"],
     "tests/support": BASE + ["tests/support/"],
     "tests/install": COE,
+    "tests/install/coe_mdp": MDP,  # find_package(rackcat COMPONENTS coe mdp)
     # The out-of-tree example device uses the installed generic layers only.
     "examples": COE + ["esi/", "ecat/"],
     "bench/coe": COE + ["tests/coe/"],
