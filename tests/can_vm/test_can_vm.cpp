@@ -27,6 +27,7 @@
 #include "modules/canopen/socketcan.hpp"
 #include "modules/control/control_api.hpp"
 #include "modules/rim/master.hpp"
+#include "tests/support/shell_quote.hpp"
 
 using namespace rackcat;
 using namespace rackcat::modules;
@@ -71,7 +72,7 @@ pid_t spawn_rim(const std::string& rackcat, const std::string& iface, int rim) {
 
 // Does this rackcat's `run` know --rim-bus?
 bool has_rim_bus(const std::string& rackcat) {
-  const std::string cmd = rackcat + " run --help 2>&1";
+  const std::string cmd = rackcat::testing::shell_quote(rackcat) + " run --help 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   if (!p) return false;
   std::string out;

@@ -110,15 +110,13 @@ TEST(LinkPcap, AFullRingDropsAndCountsInsteadOfBlocking) {
     PcapWriter w(path, 64 * 1024);
     w.start();
     std::vector<uint8_t> frame(1000, 0xA5);
-    auto worst = std::chrono::nanoseconds(0);
+    // Nothing drains the FIFO until the loop is over, so a write() that waited for the writer
+    // thread would never return (ctest's timeout); finishing with drops is the proof, no clock.
     for (int i = 0; i < 2000; ++i) {  // 2 MB: far more than the pipe and the ring hold
-      const auto t0 = std::chrono::steady_clock::now();
       w.write(frame, 1);
-      worst = std::max(worst, std::chrono::steady_clock::now() - t0);
     }
     EXPECT_GT(w.dropped(), 0u);
     EXPECT_EQ(w.frames_written() + w.dropped(), 2000u);
-    EXPECT_LT(worst, std::chrono::milliseconds(5));
     // Unblock the writer so it can finish: read everything until it closes.
     std::thread drain([reader] {
       char buf[65536];

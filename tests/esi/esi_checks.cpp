@@ -11,6 +11,7 @@
 #include <set>
 
 #include "esi/esi_writer.hpp"
+#include "tests/support/shell_quote.hpp"
 
 namespace rackcat::esi::testing {
 namespace {
@@ -50,8 +51,10 @@ std::string validate_with_xmllint(const std::string& xml, const std::string& nam
     std::ofstream out(path);
     out << xml;
   }
-  std::string cmd = fmt::format("xmllint --noout --schema {}/EtherCATInfo.xsd {} 2>&1",
-                                schema_dir(), path.string());
+  const std::string cmd =
+      fmt::format("xmllint --noout --schema {} {} 2>&1",
+                  rackcat::testing::shell_quote(schema_dir() + "/EtherCATInfo.xsd"),
+                  rackcat::testing::shell_quote(path.string()));
   std::string output;
   FILE* p = ::popen(cmd.c_str(), "r");
   if (!p) return "cannot run xmllint";

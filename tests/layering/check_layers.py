@@ -62,7 +62,7 @@ RULES = {
     "tests/device": COE + ["esi/", "ecat/", "device/", "tests/device/", "tests/support/"],
     "tests/apps": MDP + ["ecat/", "esi/", "modules/", "device/", "apps/rack_slave/", "apps/line/",
                         "tests/"],
-    "tests/can_vm": MDP + ["modules/", "tests/can_vm/"],
+    "tests/can_vm": MDP + ["modules/", "tests/can_vm/", "tests/support/"],
     "tests/support": BASE + ["tests/support/"],
     "tests/install": COE,
     "tests/install/coe_mdp": MDP,  # find_package(rackcat COMPONENTS coe mdp)

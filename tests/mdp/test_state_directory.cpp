@@ -29,10 +29,12 @@ const std::vector<uint8_t> kStore{0x73, 0x61, 0x76, 0x65};
 const std::vector<uint8_t> kLoad{0x6C, 0x6F, 0x61, 0x64};
 const std::vector<uint8_t> kCrc32{0x02, 0, 0, 0};
 const std::vector<uint8_t> kDeviceReset{0x74, 0x65, 0x73, 0x65, 0x72, 0x00};
-// One SDO exchange of a command must not wait for the file system. 20 ms is 20 cycles at
-// 1 kHz: far above what the exchange takes, far below what a FIFO (forever) or a 300 MiB read
-// (0.66 s) cost when the device thread did the file work.
-constexpr auto kAnswerBudget = std::chrono::milliseconds(20);
+// One SDO exchange of a command must not wait for the file system. This is a blocking
+// detector, not a speed target: a FIFO costs forever and a 300 MiB read 0.66 s (more on a
+// loaded machine) when the device thread does the file work, while the exchange itself takes
+// microseconds - but 20-30 ms were seen on a 2-core CI machine at load 13, so the bar sits at
+// half the cheaper of the two failures.
+constexpr auto kAnswerBudget = std::chrono::milliseconds(300);
 
 class HostileStateDirectory : public ::testing::Test {
  protected:
