@@ -43,6 +43,7 @@ class GenericDevice final : public ecat::Application {
   uint16_t on_state_request(EsmState from, EsmState to) override;
   void on_state_changed(EsmState from, EsmState to) override;
   void add_mailbox_protocols(ecat::MailboxServer& server) override;
+  bool mailbox_pending() const override { return sdo_ && sdo_->has_pending(); }
   void update_inputs(std::span<uint8_t> inputs) override;
   void on_outputs(std::span<const uint8_t> outputs) override;
   void on_watchdog_expired() override;

@@ -47,6 +47,12 @@ class Application {
   // The mailbox protocols the device serves: register each with server.add(type, protocol).
   // Called once, when the firmware starts. A device without mailbox registers none.
   virtual void add_mailbox_protocols(MailboxServer& /*server*/) {}
+  // Whether a registered protocol may have an unsolicited message (an Emergency, a finished
+  // background job's reply, a transfer to time out) that needs the firmware to run although
+  // the ESC raised no event: the firmware sleeps on its IRQ line otherwise. Cheap and
+  // thread-safe enough to be asked after every frame. The default (always) polls the
+  // protocols after every frame that passes the slave.
+  virtual bool mailbox_pending() const { return true; }
 
   // Process data. update_inputs fills the SM3 image the firmware then hands to the master
   // (after each SM2 write, or at SYNC0 when synchronised); on_outputs delivers a complete,

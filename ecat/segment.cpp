@@ -84,7 +84,7 @@ size_t Segment::process(std::span<uint8_t> frame) {
 void Segment::after_frame() {
   const size_t n = firmware_pending_;
   firmware_pending_ = 0;
-  for (size_t k = 0; k < n; ++k) slaves_[k]->run_firmware();
+  for (size_t k = 0; k < n; ++k) slaves_[k]->run_firmware_if_due();
 }
 
 void Segment::service_slave(Slave& s, uint64_t now) {

@@ -66,6 +66,11 @@ class Segment {
       if (esc_.take_reset()) firmware_.power_on();
       firmware_.poll();
     }
+    // The same, only when the microcontroller has something to do: the ESC's reset output, or
+    // Firmware::wants_service() (its IRQ line, status polling, a pending mailbox message).
+    void run_firmware_if_due() {
+      if (esc_.reset_pending() || firmware_.wants_service()) run_firmware();
+    }
 
    private:
     // The EEPROM next to the ESC holds the device's SII image.
@@ -101,9 +106,11 @@ class Segment {
   // Allocates nothing. Fires due SYNC events and watchdogs first (see service()).
   size_t process(std::span<uint8_t> frame);
   // The firmware of every slave the last frame passed runs here, after its reply has left
-  // (the event loop calls it once the frame is sent): a microcontroller works between frames,
-  // so a slow mailbox service (a device reset, a store) never delays the reply, which SOEM
-  // drops when it comes later than 2 ms. process() runs what a caller left pending first.
+  // (the event loop calls it once the frame is sent), for those slaves whose firmware has
+  // work (Firmware::wants_service: an ESC event on its IRQ line, a mailbox message pending): a
+  // microcontroller works between frames, so a slow mailbox service (a device reset, a store) never
+  // delays the reply, which SOEM drops when it comes later than 2 ms. process() runs what a caller
+  // left pending first.
   void after_frame();
 
   // Fires the SYNC events and watchdog expiries due now (clock time). Call at

@@ -624,6 +624,10 @@ size_t Device::handle_mailbox(std::span<const uint8_t> request, std::span<uint8_
   return d.sdo->handle(request, reply, d.state);
 }
 
+bool Device::mailbox_pending() const {
+  return impl_->writer->has_results() || !impl_->foe->idle() || impl_->sdo->has_pending();
+}
+
 size_t Device::poll_mailbox(std::span<uint8_t> reply) {
   impl_->complete_jobs();
   impl_->foe->tick();

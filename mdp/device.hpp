@@ -98,6 +98,10 @@ class Device {
   // where command objects whose file work has finished on the worker (0xFBF0, 0xFBF2..0xFBF4)
   // complete, so call it regularly (the ESC does, whenever the mailbox is idle).
   size_t poll_mailbox(std::span<uint8_t> reply);
+  // Whether poll_mailbox() has work: an Emergency or SDO Information fragment queued, a
+  // command's file work finished on the worker, a FoE transfer open (its timeout). The
+  // firmware runs without an ESC event only then (ecat::Application::mailbox_pending).
+  bool mailbox_pending() const;
   // Queue a CoE Emergency (ETG.1000.6 §5.6.4): error code (CiA-style, e.g. 0x4210), error
   // register (0x1001 style bits) and 5 manufacturer bytes ([0] RIM, [1] module, [2] event bit,
   // [3..4] channel mask). It is a diagnosis message like report_diagnosis() (text ID from

@@ -84,6 +84,10 @@ size_t RackSlave::CoeMailbox::on_request(std::span<const uint8_t> request, std::
   return n;
 }
 
+bool RackSlave::mailbox_pending() const {
+  return restart_pending_ || device_->mailbox_pending();
+}
+
 size_t RackSlave::CoeMailbox::poll(std::span<uint8_t> reply) {
   RackSlave& self = slave;
   // SM1 is free: the master has read the answer to the reset command, so the restart no

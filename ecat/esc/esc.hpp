@@ -106,6 +106,7 @@ class Esc {
   // The ESC was reset (power-on or 'R','E','S' to 0x0040) since the last call: the reset
   // output that restarts the microcontroller behind it (ESC datasheet 0x0040).
   bool take_reset();
+  bool reset_pending() const { return reset_signal_; }
 
   // ---- port wiring (set by Segment) ----------------------------------------------------------
   // Whether a cable with a live partner is on port 1 (port 0 always has the master side).

@@ -250,6 +250,7 @@ void Firmware::esm_enter(EsmState to) {
     dc_synchronised_ = sync0_active();
     pd_start();
   }
+  update_polling();
   esm_write_status();
   app_.on_state_changed(from, to);
   if (observer_ != nullptr) observer_->on_transition(from, to);

@@ -17,9 +17,12 @@ constexpr uint32_t kEventWatchdog = 0x0040;
 constexpr uint32_t kEventSm0 = 0x0100;
 constexpr uint32_t kEventSm2 = 0x0400;
 constexpr uint32_t kEventSm3 = 0x0800;
-// The events the firmware takes: AL control, SYNC0/1, SM activation, watchdog, SM0-SM3.
-constexpr uint32_t kEventMask =
-    kEventAlControl | kEventSync0 | kEventSync1 | kEventSmActivation | kEventWatchdog | 0x0F00;
+// The events the firmware takes: AL control, SYNC0/1, SM activation, watchdog, SM0, SM2, SM3.
+// Not SM1 (0x0200, "mailbox read by the master"): it stays pending until the next reply is
+// written, which would keep the IRQ line up between exchanges; the mailbox checks SM1's
+// status when it has a message to send instead.
+constexpr uint32_t kEventMask = kEventAlControl | kEventSync0 | kEventSync1 | kEventSmActivation |
+                                kEventWatchdog | kEventSm0 | kEventSm2 | kEventSm3;
 
 }  // namespace
 
@@ -39,6 +42,7 @@ void Firmware::power_on() {
   dc_synchronised_ = false;
   sm_taken_ = {};
   read_sms();
+  update_polling();
   esm_write_status();
   if (previous != EsmState::Init) {
     app_.on_state_changed(previous, EsmState::Init);
@@ -61,6 +65,16 @@ void Firmware::read_sms() {
     s.enabled = (s.activate & reg::sm::kActivateEnable) && s.length != 0 &&
                 static_cast<uint32_t>(s.start) + s.length <= reg::kAddressSpace;
   }
+}
+
+void Firmware::update_polling() {
+  const auto without_event = [](const Sm& s) {
+    return s.enabled && (s.control & reg::sm::kControlAlEvent) == 0;
+  };
+  const bool process_data = state_ == EsmState::SafeOp || state_ == EsmState::Op;
+  polls_status_ = dc_synchronised_ ||
+                  (process_data && (without_event(sm_taken_[2]) || without_event(sm_taken_[3]))) ||
+                  (mailbox_.running() && (sm_taken_[0].control & reg::sm::kControlAlEvent) == 0);
 }
 
 void Firmware::poll() {
@@ -101,6 +115,7 @@ void Firmware::poll() {
                       (pdi_.read8(reg::sm::base(0) + reg::kSmStatusOffset) & reg::sm::kStatusFull));
     mailbox_.service(state_, sm0, activation);
   }
+  update_polling();
 }
 
 }  // namespace rackcat::ecat

@@ -13,8 +13,9 @@
 //     and handed to the device in OP; SM3 inputs produced then (free run) or at SYNC0 (DC
 //     synchronous) and written for the master's next read.
 //
-// Drive it like a main loop: poll() after every frame and every timer event (or on the IRQ
-// line of a real chip). Nothing on that path allocates.
+// Drive it like a microcontroller on its IRQ line: poll() whenever wants_service() says so
+// (after a frame, after a timer event). A slave whose ESC raised no event and whose device has
+// nothing for the mailbox is not run at all. Nothing on that path allocates.
 #pragma once
 
 #include <array>
@@ -43,6 +44,17 @@ class Firmware {
   // One pass over the chip's events (AL event request 0x0220): AL control, SM activation,
   // mailbox, process data, SYNC, watchdog.
   void poll();
+  // Whether poll() has work (ESC datasheet 0x0220/0x0204; ETG.1000.4 §6.5): the IRQ line is up
+  // (an AL event the firmware takes: AL control, SM activation, SYNC0/1, watchdog, SM0/SM2/SM3
+  // written or read), a SyncManager configured without AL event (control bit 5) must be polled
+  // by its status, a DC-synchronised cycle is supervised, an EEPROM store waits for the master
+  // to hand over the EEPROM (0x0500), or the device has an unsolicited
+  // mailbox message (Application::mailbox_pending). SM1's "read" event is not taken: the
+  // mailbox looks at SM1's status itself when it has something to send, as SOES does.
+  bool wants_service() const {
+    return pdi_.irq() || polls_status_ || eeprom_pending_ ||
+           (mailbox_.running() && app_.mailbox_pending());
+  }
 
   // The local application reports an error (ETG.1000.6 §5.3.3, "local error"): the ESM falls
   // to `fall_to` if that is below the current state (never rises), sets the error flag and
@@ -86,6 +98,8 @@ class Firmware {
     bool enabled = false;  // activate bit 0, non-zero length inside the address space
   };
   void read_sms();
+  // Recomputes polls_status_ after the state or the SyncManagers changed.
+  void update_polling();
 
   // esm.cpp
   void esm_control_written();
@@ -122,6 +136,7 @@ class Firmware {
   std::array<Sm, 4> sm_taken_{};  // ... as checked when the current state was entered
   bool dc_synchronised_ = false;  // SYNC0 was running when SAFEOP was entered
   bool eeprom_pending_ = false;   // store_eeprom() waits for the master to offer the EEPROM
+  bool polls_status_ = false;     // poll() must run without an event (see wants_service)
 
   std::vector<uint8_t> outputs_;  // SM2 as last read (sized on PREOP -> SAFEOP)
   std::vector<uint8_t> inputs_;   // SM3 image the device fills

@@ -122,6 +122,7 @@ size_t TestApplication::on_request(std::span<const uint8_t> request, std::span<u
 }
 
 size_t TestApplication::poll(std::span<uint8_t> reply) {
+  ++polls;
   if (pending_emergency.empty() || pending_emergency.size() > reply.size()) return 0;
   std::copy(pending_emergency.begin(), pending_emergency.end(), reply.begin());
   const size_t n = pending_emergency.size();

@@ -41,6 +41,7 @@ class TestApplication : public Application, public MailboxProtocol {
   size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
                     EsmState state) override;
   size_t poll(std::span<uint8_t> reply) override;
+  bool mailbox_pending() const override { return !pending_emergency.empty(); }
   void update_inputs(std::span<uint8_t> inputs) override;
   void on_outputs(std::span<const uint8_t> outputs) override;
   void on_sync(int which, uint64_t system_time_ns) override;
@@ -57,6 +58,7 @@ class TestApplication : public Application, public MailboxProtocol {
   int mailbox_requests = 0;
   std::vector<uint8_t> last_request;
   std::vector<uint8_t> pending_emergency;  // sent by poll() once
+  int polls = 0;                           // poll() calls: the firmware ran with SM1 free
   std::vector<std::pair<EsmState, EsmState>> transitions;
   std::vector<std::pair<int, uint64_t>> syncs;
   int watchdog_expiries = 0;

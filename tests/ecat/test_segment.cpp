@@ -86,4 +86,32 @@ TEST(Segment, NextEventIsTheEarliestOfAllSlaves) {
 }
 
 }  // namespace
+// The firmware runs on its IRQ line (ESC datasheet 0x0220/0x0204): a frame that raises no AL
+// event for a slave, whose device has nothing for the mailbox, does not run that slave's
+// firmware at all; a device with an unsolicited message is served after any frame.
+TEST(Segment, FirmwareRunsOnlyForSlavesWithWork) {
+  Line line(3);
+  line.to_preop();
+  // The firmware's own PDI activation of SM0/SM1 on entering PREOP raised AL event bit 4
+  // (ESC datasheet 0x0220): one more run after the next frame re-reads the SMs.
+  line.master->send(Command::Brd, 0, 0x0130, {0, 0});
+  for (size_t i = 0; i < 3; ++i) line.app(i).polls = 0;
+  for (int k = 0; k < 5; ++k) line.master->send(Command::Brd, 0, 0x0130, {0, 0});
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(line.app(i).polls, 0) << i;
+  line.app(1).pending_emergency = {0x0A, 0x00, 0x00, 0x00, 0x00, 0x13, 0x00, 0x10};
+  line.master->send(Command::Brd, 0, 0x0130, {0, 0});
+  EXPECT_EQ(line.app(0).polls, 0);
+  EXPECT_EQ(line.app(1).polls, 1);
+  EXPECT_EQ(line.app(2).polls, 0);
+  // The message is in SM1 for the master; the slave sleeps again.
+  const auto r = line.master->fprd(Line::station(1), kMbxInStart, kMbxSize);
+  EXPECT_EQ(r.wkc, 1);
+  EXPECT_EQ(r.data[5] & 0x0F, 0x03);
+  line.master->send(Command::Brd, 0, 0x0130, {0, 0});
+  EXPECT_EQ(line.app(1).polls, 1);
+  // An AL control write is an AL event: the addressed slave's firmware runs (and answers).
+  line.master->fpwr(Line::station(2), 0x0120, {0x02, 0x00});
+  EXPECT_EQ(line.esc(2).al_status() & 0x0F, 0x02);
+}
+
 }  // namespace rackcat::ecat::test
