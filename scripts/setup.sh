@@ -48,8 +48,9 @@ PY_DEMO_PACKAGES=(pysoem)
 PY_TEST_PACKAGES=(pytest)
 # The EtherCAT masters of the conformance matrix (tests/conformance, docs/INTEROP.md), pinned:
 # a new release is adopted by changing the version here and re-running the matrix. soemx
-# builds from source against libpcap (libpcap-dev, python3-dev above).
-PY_TEST_PINNED=(kickcat==2.5 soemx==0.1.1 pyecm==0.0.3 ebpfcat==1.0.0)
+# builds from source against libpcap (libpcap-dev, python3-dev above). mypy checks the types
+# of python/rackcat_line, the master developers' package (it ships py.typed).
+PY_TEST_PINNED=(kickcat==2.5 soemx==0.1.1 pyecm==0.0.3 ebpfcat==1.0.0 mypy==1.13.0)
 
 deb=("${DEB_DEMO[@]}")
 py=("${PY_DEMO_PACKAGES[@]}")
@@ -103,7 +104,7 @@ if [ "$PROFILE" = test ]; then
     [ "$have" = "${spec#*==}" ] || need_pinned+=("$spec")
   done
   if [ ${#need_pinned[@]} -gt 0 ]; then
-    echo "setup: installing pinned EtherCAT masters into .venv: ${need_pinned[*]}"
+    echo "setup: installing pinned test packages into .venv: ${need_pinned[*]}"
     "$VENV/bin/python" -m pip install --disable-pip-version-check --progress-bar off \
       "${need_pinned[@]}"
   fi

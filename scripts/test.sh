@@ -61,6 +61,11 @@ do_web() {
   npm run --silent typecheck
   npm test
 }
+# python/rackcat_line promises types to its users (py.typed): they must hold.
+do_pytypes() {
+  . scripts/python.sh
+  "$PY" -m mypy --strict --no-error-summary --cache-dir=/dev/null python/rackcat_line
+}
 do_pysoem() {
   . scripts/python.sh
   # pytest exits 5 when it collected no test at all: that is a failure here too.
@@ -97,6 +102,7 @@ step "release build" do_build
 step "unit tests (release)" do_unit
 step "clang-tidy" do_tidy
 step "web page: lint, types, unit tests" do_web
+step "python package: types (mypy --strict)" do_pytypes
 if [ "${SKIP_INTEROP:-0}" != 1 ]; then
   step "interop: pysoem over veth" do_pysoem
   step "demo (README's first command)" do_demo
