@@ -36,6 +36,7 @@ Segment::Segment(std::vector<Application*> applications, const Clock& clock, Seg
     esc.power_on_local_time_ns = esc.power_on_local_time_ns + k * options_.power_on_spacing_ns;
     slaves_.push_back(std::make_unique<Slave>(*applications[k], clock_, esc, options_.pdi));
     slaves_[k]->esc().set_port1_link(k + 1 < n);
+    slaves_[k]->esc().set_next_event_bound(&next_event_bound_);
   }
   // Arrival at port 0 of slave k, and the time the frame takes from entering slave k at port 0
   // to leaving it at port 0 again (through everything behind it).
@@ -64,7 +65,7 @@ size_t Segment::process(std::span<uint8_t> frame) {
   if (layout_.kind == FrameLayout::Kind::OtherType) return frame.size();
   after_frame();
   const uint64_t t0 = clock_.now_ns();
-  for (auto& s : slaves_) service_slave(*s, t0);
+  if (t0 >= next_event_bound_) service_at(t0);
   uint8_t* base = frame.data();
   for (size_t k = 0; k < slaves_.size(); ++k) {
     Slave& slave = *slaves_[k];
@@ -95,8 +96,16 @@ void Segment::service_slave(Slave& s, uint64_t now) {
 }
 
 void Segment::service() {
-  const uint64_t now = clock_.now_ns();
-  for (auto& s : slaves_) service_slave(*s, now);
+  service_at(clock_.now_ns());
+}
+
+void Segment::service_at(uint64_t now) {
+  uint64_t next = std::numeric_limits<uint64_t>::max();
+  for (auto& s : slaves_) {
+    service_slave(*s, now);
+    next = std::min(next, s->esc().next_event_ns());
+  }
+  next_event_bound_ = next;
 }
 
 uint64_t Segment::next_event_ns() const {

@@ -2,13 +2,15 @@
 // slave's processing unit in order, and comes back out of slave 0 (ETG.1000.4 §5.1). Each
 // slave is what a real one is: an ESC (ecat/esc), the firmware behind its PDI (ecat/slave)
 // and the device (Application). The firmware runs between frames and at timer events, as a
-// microcontroller does between the frames its ESC processes.
+// microcontroller does between the frames its ESC processes. Timers (SYNC0/1, watchdogs) are
+// scheduled through one next-event bound for the whole line, not by a walk over every ESC per
+// frame (next_event_bound_ns()).
 //
 // Typical use by a link:
 //   rackcat::ecat::Segment segment({&device_a, &device_b});
 //   size_t n = segment.process(frame);            // in place; send frame[0..n) back, 0 = drop
 //   segment.after_frame();                        // once it is sent: the slaves' firmware runs
-//   timer at segment.next_event_ns(): segment.service();
+//   timer at segment.next_event_bound_ns(): segment.service();
 // Not thread-safe: process(), service() and every Esc/Application call belong to one thread
 // (the link's event loop); other threads post work to it.
 #pragma once
@@ -97,13 +99,17 @@ class Segment {
   // outlive the segment. At least one slave.
   explicit Segment(std::vector<Application*> applications,
                    const Clock& clock = SteadyClock::instance(), SegmentOptions options = {});
+  // The ESCs keep a pointer to the segment's next-event bound: not copyable, not movable.
+  Segment(const Segment&) = delete;
+  Segment& operator=(const Segment&) = delete;
 
   // Processes one Ethernet frame in place, as the line would, and returns the length of the
   // frame that comes back to the master: frame.size() for EtherCAT frames (full length, bit
   // 0x02 of the first source-MAC byte set), 0 for frames the ESCs do not answer (other
   // EtherTypes, runts). Malformed EtherCAT frames never crash: complete datagrams before the
   // defect are processed, the rest passes unchanged and every slave counts a frame error.
-  // Allocates nothing. Fires due SYNC events and watchdogs first (see service()).
+  // Allocates nothing. Fires due SYNC events and watchdogs first when the next-event bound
+  // has come (see service()).
   size_t process(std::span<uint8_t> frame);
   // The firmware of every slave the last frame passed runs here, after its reply has left
   // (the event loop calls it once the frame is sent), for those slaves whose firmware has
@@ -113,12 +119,19 @@ class Segment {
   // left pending first.
   void after_frame();
 
-  // Fires the SYNC events and watchdog expiries due now (clock time). Call at
-  // next_event_ns(); process() calls it too.
+  // Fires the SYNC events and watchdog expiries due now (clock time) and recomputes the
+  // next-event bound. Call at next_event_bound_ns(); process() calls it too when the bound is
+  // due.
   void service();
   // Clock time of the earliest pending SYNC event or watchdog deadline of any slave;
-  // UINT64_MAX when none.
+  // UINT64_MAX when none. Walks every ESC (tests, diagnostics).
   uint64_t next_event_ns() const;
+  // A time at or before the earliest pending timer event of any slave, in O(1): exact after
+  // service(), lowered by every ESC that arms a timer (Esc::set_next_event_bound), left early
+  // by timers that are cancelled or retriggered later (the watchdog, every cycle) - then
+  // service() at that time finds nothing due and computes the exact time. The event loop's
+  // timer deadline (ecat/host/runner.cpp): no walk over the ESCs per frame.
+  uint64_t next_event_bound_ns() const { return next_event_bound_; }
   // Clock time of the earliest pending SYNC0/SYNC1 event of any slave; UINT64_MAX when none.
   uint64_t next_sync_event_ns() const;
 
@@ -129,10 +142,12 @@ class Segment {
 
  private:
   void service_slave(Slave& s, uint64_t now);
+  void service_at(uint64_t now);  // every slave, then the exact next-event bound
   const Clock& clock_;
   SegmentOptions options_;
   std::vector<std::unique_ptr<Slave>> slaves_;
   size_t firmware_pending_ = 0;     // slaves 0..n-1 of the last frame, firmware not run yet
+  uint64_t next_event_bound_ = 0;   // <= every slave's next timer event (0: walk at once)
   std::vector<PassTimes> offsets_;  // per slave, relative to the frame's arrival at slave 0
   FrameLayout layout_;
 };

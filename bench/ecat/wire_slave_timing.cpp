@@ -109,7 +109,7 @@ int main(int argc, char** argv) {
   std::vector<uint32_t> send_ns;
   process_ns.reserve(kMaxSamples);
   send_ns.reserve(kMaxSamples);
-  uint64_t deadline = segment.next_event_ns();
+  uint64_t deadline = segment.next_event_bound_ns();
   pollfd pfd{link->fd(), POLLIN, 0};
   while (g_stop == 0) {
     if (!busy) {
@@ -142,11 +142,11 @@ int main(int argc, char** argv) {
         send_ns.push_back(static_cast<uint32_t>(t2 - t1));
       }
       if (!echo) segment.after_frame();  // the firmware, once the reply is out (as EventLoop)
-      deadline = segment.next_event_ns();
+      deadline = segment.next_event_bound_ns();
     }
     if (now_ns() >= deadline) {
       segment.service();
-      deadline = segment.next_event_ns();
+      deadline = segment.next_event_bound_ns();
     }
   }
   print_summary("process", std::move(process_ns));

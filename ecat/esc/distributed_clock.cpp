@@ -77,6 +77,8 @@ void Esc::dc_system_time_written(uint16_t address, const uint8_t* src, uint16_t 
   if (diff != 0 && diff > -kMaxFollowedDifferenceNs && diff < kMaxFollowedDifferenceNs) {
     // First-order loop: move half-way towards the reference on every compare.
     local_offset_ += static_cast<uint64_t>(diff / 2 != 0 ? diff / 2 : diff);
+    // The SYNC times are system times: in clock time they move with the local clock.
+    if (sync0_running_ || sync1_running_) timers_changed();
   }
 }
 
@@ -112,6 +114,13 @@ void Esc::dc_activation_written() {
   } else if (!sync1) {
     sync1_running_ = false;
   }
+  timers_changed();
+}
+
+void Esc::timers_changed() {
+  if (next_event_bound_ == nullptr) return;
+  const uint64_t next = next_event_ns();
+  if (next < *next_event_bound_) *next_event_bound_ = next;
 }
 
 void Esc::fire_sync(int which, uint64_t system_time_ns) {

@@ -89,6 +89,12 @@ class Esc {
   void service(uint64_t now_ns);
   // Clock time of the next SYNC event or watchdog deadline; UINT64_MAX when none is pending.
   uint64_t next_event_ns() const;
+  // A next-event bound kept by whoever schedules the timers of many ESCs (Segment): whenever
+  // this ESC arms or moves a timer (SYNC activation, DC offset or drift correction, watchdog
+  // trigger) *bound is lowered to next_event_ns() if that is earlier. It is never raised
+  // here: a cancelled or later timer leaves an early bound, which costs the scheduler one
+  // look too many, never a late event. nullptr (the default): nobody listens.
+  void set_next_event_bound(uint64_t* bound) { next_event_bound_ = bound; }
   // Clock time of the next SYNC0/SYNC1 event; UINT64_MAX when that unit is not running.
   uint64_t next_sync_event_ns() const;
   // Raises a SYNC event now: SYNC status 0x098E/0x098F and AL event bits 2/3; the pulse's
@@ -205,6 +211,8 @@ class Esc {
   uint64_t watchdog_period_ns() const;
   void watchdog_trigger(uint64_t now_ns);
   void watchdog_expired();
+  // A timer was armed or moved: lowers the next-event bound (set_next_event_bound).
+  void timers_changed();
 
   SiiEeprom& eeprom_;
   const Clock& clock_;
@@ -238,6 +246,7 @@ class Esc {
   // Process-data watchdog deadline (clock time), armed by SM2 writes with trigger enabled.
   bool watchdog_armed_ = false;
   uint64_t watchdog_deadline_ = 0;
+  uint64_t* next_event_bound_ = nullptr;
 
   // RW commands keep the incoming data here while the old memory is read into the datagram.
   std::array<uint8_t, 2048> scratch_{};

@@ -168,6 +168,10 @@ void Esc::after_register_write(uint16_t address, const uint8_t* src, uint16_t le
     le::put16(&mem_[reg::kDcSpeedCounterDiff], 0);  // new start value resets the filters
   }
   if (overlaps(address, len, reg::kDcActivation, 1)) dc_activation_written();
+  // A new system time offset moves the SYNC times (system time) in clock time.
+  if (overlaps(address, len, reg::kDcSystemTimeOffset, 8) && (sync0_running_ || sync1_running_)) {
+    timers_changed();
+  }
 }
 
 void Esc::before_register_read(uint16_t address, uint16_t len) {

@@ -23,6 +23,7 @@ void Esc::watchdog_trigger(uint64_t now_ns) {
   }
   watchdog_armed_ = true;
   watchdog_deadline_ = now_ns + period;
+  timers_changed();
 }
 
 void Esc::watchdog_expired() {

@@ -4,11 +4,12 @@ namespace rackcat::ecat {
 namespace {
 
 // The segment's deadlines (SYNC pulses, watchdogs) as the loop's timer source. Both use
-// CLOCK_MONOTONIC nanoseconds.
+// CLOCK_MONOTONIC nanoseconds. The bound may be early (a retriggered watchdog): on_time()
+// then fires nothing and the segment computes the exact next time.
 class SegmentTimers final : public TimerSource {
  public:
   explicit SegmentTimers(Segment& segment) : segment_(segment) {}
-  uint64_t next_deadline_ns() const override { return segment_.next_event_ns(); }
+  uint64_t next_deadline_ns() const override { return segment_.next_event_bound_ns(); }
   void on_time(uint64_t) override { segment_.service(); }
 
  private:

@@ -114,4 +114,28 @@ TEST(Segment, FirmwareRunsOnlyForSlavesWithWork) {
   EXPECT_EQ(line.esc(2).al_status() & 0x0F, 0x02);
 }
 
+// Timers are scheduled through one next-event bound, not a walk over every ESC per frame: the
+// bound is never later than the earliest timer (a retriggered watchdog leaves it early), and
+// service() at the bound makes it exact again. The watchdog still expires on time.
+TEST(Segment, NextEventBoundIsEarlyNeverLate) {
+  Line line(3);
+  line.to_op();  // the cycles armed every slave's process-data watchdog (100 ms)
+  const std::vector<uint8_t> outputs(3 * kOutputBytes, 0);
+  for (int k = 0; k < 5; ++k) {
+    line.clock.advance(1'000'000);
+    line.cycle(outputs);  // retriggers: the watchdogs move later
+    EXPECT_LE(line.segment->next_event_bound_ns(), line.segment->next_event_ns());
+  }
+  line.segment->service();
+  EXPECT_EQ(line.segment->next_event_bound_ns(), line.segment->next_event_ns());
+  EXPECT_EQ(line.segment->next_event_ns(), line.clock.now_ns() + 100'000'000);
+  // No more cycles: at the deadlines (slave k's is later by the frame's way to it) the
+  // watchdogs expire and the slaves fall to SAFEOP.
+  line.clock.advance(100'001'000);
+  ASSERT_LE(line.segment->next_event_bound_ns(), line.clock.now_ns());
+  line.segment->service();
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(line.esc(i).al_status() & 0x0F, 0x04) << i;
+  EXPECT_EQ(line.segment->next_event_bound_ns(), UINT64_MAX);
+}
+
 }  // namespace rackcat::ecat::test
