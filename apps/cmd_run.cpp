@@ -145,6 +145,16 @@ int run(const RunArgs& a) {
       }
       for (const auto& w : line_file->wiring)
         at[w.to]->add_wire(*at[w.from], w.from_bit, w.to_bit, w.bits);
+      // Signal sources on ESI devices' inputs, sampled every cycle at the time since start.
+      const auto start = std::chrono::steady_clock::now();
+      for (size_t i = 0; i < line_file->devices.size(); ++i) {
+        for (const auto& in : line_file->devices[i].inputs) {
+          at[i]->add_input_driver(in.bit, in.bits, [in, start] {
+            const std::chrono::duration<double> t = std::chrono::steady_clock::now() - start;
+            return in.code(in.source->sample(t.count()));
+          });
+        }
+      }
     } else {
       for (int i = 0; i < a.slaves; ++i) {
         racks.push_back(std::make_unique<RackSlave>(*config, state, i));

@@ -2,6 +2,8 @@
 // process data per the PDO assignment (ETG.1000.6 §5.6.7.4).
 #include "device/generic_device.hpp"
 
+#include <array>
+
 #include "ecat/slave/mailbox_server.hpp"
 
 #include "esi/describe_dictionary.hpp"
@@ -71,6 +73,10 @@ void GenericDevice::add_wire(const GenericDevice& source, size_t from_bit, size_
   wires_.push_back({&source, from_bit, to_bit, bits});
 }
 
+void GenericDevice::add_input_driver(size_t to_bit, size_t bits, std::function<uint64_t()> code) {
+  drivers_.push_back({to_bit, std::min<size_t>(bits, 64), std::move(code)});
+}
+
 uint16_t GenericDevice::on_state_request(EsmState from, EsmState to) {
   if (image_ && from == EsmState::PreOp && to == EsmState::SafeOp) {
     // The assignment may have changed in PREOP: recompile (ETG.1000.6 Table 11 0x001D/0x001E
@@ -109,6 +115,12 @@ void GenericDevice::update_inputs(std::span<uint8_t> inputs) {
   for (const auto& w : wires_) {
     std::unique_lock source(w.source->mutex_, std::try_to_lock);
     if (source.owns_lock()) copy_bits(w.source->outputs_, w.from_bit, inputs_, w.to_bit, w.bits);
+  }
+  for (const auto& d : drivers_) {
+    const uint64_t v = d.code();
+    std::array<uint8_t, 8> le{};
+    for (size_t k = 0; k < le.size(); ++k) le[k] = static_cast<uint8_t>(v >> (8 * k));
+    copy_bits(le, 0, inputs_, d.to_bit, d.bits);
   }
   if (image_) {
     // Inputs set from outside land in the mapped objects, which the master reads via SM3.

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -38,6 +39,10 @@ class GenericDevice final : public ecat::Application {
   // Loopback wiring: each cycle, bits [from_bit, from_bit+bits) of `source`'s outputs become
   // bits [to_bit, ...) of this device's inputs. Call before the line runs.
   void add_wire(const GenericDevice& source, size_t from_bit, size_t to_bit, size_t bits);
+  // Each cycle, bits [to_bit, to_bit+bits) (bits <= 64) of the inputs become the low bits of
+  // `code()` (a signal source of the line). `code` runs on the cyclic path: it must not
+  // allocate. Call before the line runs.
+  void add_input_driver(size_t to_bit, size_t bits, std::function<uint64_t()> code);
 
   std::span<const uint8_t> eeprom() const override { return sii_; }
   uint16_t on_state_request(EsmState from, EsmState to) override;
@@ -72,6 +77,11 @@ class GenericDevice final : public ecat::Application {
     size_t from_bit, to_bit, bits;
   };
   std::vector<Wire> wires_;
+  struct Driver {
+    size_t to_bit, bits;
+    std::function<uint64_t()> code;
+  };
+  std::vector<Driver> drivers_;
 };
 
 // Copies bits between byte buffers (LSB-first, EtherCAT bit order).

@@ -183,17 +183,118 @@ class EniReader {
       fail(info, e.what());
     }
     // The ESI's own errors name the ESI file and line.
-    ld.esi = std::make_unique<device::EsiDevice>(device::parse_esi_device(
-        esi_text, path, device::DeviceSelector::by_code(product, revision)));
+    auto selector = device::DeviceSelector::by_code(product, revision);
+    selector.modules = module_list(slave);
+    ld.esi =
+        std::make_unique<device::EsiDevice>(device::parse_esi_device(esi_text, path, selector));
     if (ld.esi->description.vendor_id != vendor)
       fail(info, "the ESI device for product " + hex32(product) + " in " + path +
                      " has another vendor (" + hex32(ld.esi->description.vendor_id) + ")");
+    if (auto alias = station_alias(info)) ld.esi->description.config.station_alias = *alias;
     if (auto serial = info.child("SerialNo"))
       ld.esi->description.serial =
           static_cast<uint32_t>(number(serial, serial.text().get(), "SerialNo"));
     if (auto pd = slave.child("ProcessData")) apply_process_data(pd, *ld.esi);
     check_init_cmds(slave, *ld.esi);
     return ld;
+  }
+
+  // Info/Identification (ETG.2100): the master identifies the slave by the value of the ESC
+  // register `Ado`; for 0x0012, the configured station alias, the ESC loads it from SII word 4
+  // (ETG.2010 Table 2), so the emulated device's SII carries `Value` there. Another register
+  // (0x0134 Explicit Device ID: an ID selector the emulated ESC has not) is refused.
+  std::optional<uint16_t> station_alias(pugi::xml_node info) const {
+    auto id = info.child("Identification");
+    if (!id) return std::nullopt;
+    const auto ado = child_number(id, "Ado");
+    if (ado != 0x0012)
+      fail(id.child("Ado"), "identification by ADO " + hex16(static_cast<uint16_t>(ado)) +
+                                " is not emulated; only the configured station alias 0x0012");
+    const auto value = child_number(id, "Value");
+    if (value < 0 || value > 0xFFFF) fail(id.child("Value"), "station alias is 0..0xFFFF");
+    return static_cast<uint16_t>(value);
+  }
+
+  // ETG.2100 has no element for a modular device's modules: a configurator downloads the
+  // configured module ident list 0xF030 (ETG.5001.1 §5.3) as CoE init commands, by complete
+  // access (subindex 0 with the count, one padding byte, then 4 bytes per module) or entry by
+  // entry (subindices 1..n, then subindex 0 = n). That list, when present, chooses the ESI
+  // device's modules (device::ModuleChoice naming the init command's line).
+  std::optional<std::vector<device::ModuleChoice>> module_list(pugi::xml_node slave) const {
+    std::map<uint8_t, std::pair<uint32_t, size_t>> entries;  // subindex -> (ident, line)
+    std::optional<size_t> count;
+    size_t count_line = 0;
+    for (auto c : slave.child("Mailbox").child("CoE").child("InitCmds").children("InitCmd")) {
+      if (child_number(c, "Index") != 0xF030) continue;
+      if (auto ccs = c.child("Ccs"); ccs && number(ccs, ccs.text().get(), "Ccs") != 1) continue;
+      const auto sub = child_number(c, "SubIndex");
+      const bool ca = std::string_view(c.attribute("CompleteAccess").value()) == "true" ||
+                      std::string_view(c.attribute("CompleteAccess").value()) == "1";
+      const std::string hex = c.child("Data").text().get();
+      std::vector<uint8_t> data;
+      for (size_t i = 0; i + 1 < hex.size(); i += 2) {
+        const auto b = parse_hex_byte(hex[i], hex[i + 1]);
+        if (!b) fail(c.child("Data") ? c.child("Data") : c, "<Data> is not hexBinary");
+        data.push_back(*b);
+      }
+      const size_t line = line_of(c);
+      if (ca && sub == 0) {
+        if (data.empty() || data.size() != 2 + 4 * size_t{data[0]})
+          fail(c, "0xF030 complete access: " + std::to_string(data.size()) +
+                      " bytes, not 2 + 4 x the count in its first byte");
+        entries.clear();
+        for (uint8_t k = 1; k <= data[0]; ++k) {
+          const size_t at = 2 + 4 * (k - 1u);
+          entries[k] = {
+              static_cast<uint32_t>(data[at] | (data[at + 1] << 8) | (data[at + 2] << 16) |
+                                    (static_cast<uint32_t>(data[at + 3]) << 24)),
+              line};
+        }
+        count = data[0];
+        count_line = line;
+      } else if (!ca && sub == 0 && data.size() == 1) {
+        count = data[0];
+        count_line = line;
+      } else if (!ca && sub >= 1 && sub <= 255 && data.size() == 4) {
+        entries[static_cast<uint8_t>(sub)] = {
+            static_cast<uint32_t>(data[0] | (data[1] << 8) | (data[2] << 16) |
+                                  (static_cast<uint32_t>(data[3]) << 24)),
+            line};
+      } else {
+        fail(c,
+             "0xF030 init command is neither complete access from subindex 0 nor one "
+             "entry (4 bytes) or the count (1 byte)");
+      }
+    }
+    if (!count) {
+      if (!entries.empty()) fail(slave, "0xF030 init commands without the count (subindex 0)");
+      return std::nullopt;
+    }
+    std::vector<device::ModuleChoice> out;
+    for (uint8_t k = 1; k <= *count; ++k) {
+      auto it = entries.find(k);
+      if (it == entries.end())
+        throw device::FileError(file_, count_line,
+                                "0xF030 lists " + std::to_string(*count) +
+                                    " modules but no init command sets subindex " +
+                                    std::to_string(k));
+      char ref[16];
+      std::snprintf(ref, sizeof ref, "#x%08X", it->second.first);
+      out.push_back({ref, file_, it->second.second});
+    }
+    return out;
+  }
+
+  static std::optional<uint8_t> parse_hex_byte(char hi, char lo) {
+    auto nib = [](char c) -> int {
+      if (c >= '0' && c <= '9') return c - '0';
+      if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+      if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+      return -1;
+    };
+    const int h = nib(hi), l = nib(lo);
+    if (h < 0 || l < 0) return std::nullopt;
+    return static_cast<uint8_t>(h * 16 + l);
   }
 
   // ProcessData/RxPdo and TxPdo: the same PDOs as the ESI, those with Sm assigned.

@@ -3,6 +3,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -10,6 +12,7 @@
 
 #include "device/esi_error.hpp"
 #include "mdp/file_root.hpp"
+#include "modules/signals/source_factory.hpp"
 
 namespace rackcat::apps {
 namespace {
@@ -67,9 +70,9 @@ struct Parser {
     for (const auto& d : devices) {
       if (!d.IsMap()) fail(d, "a device is a map with esi: or rack:");
       for (auto kv : d) {
-        static const std::set<std::string> known = {"esi",      "device", "product_code",
-                                                    "revision", "rack",   "name",
-                                                    "alias",    "count",  "modules"};
+        static const std::set<std::string> known = {"esi",     "device", "product_code", "revision",
+                                                    "rack",    "name",   "alias",        "count",
+                                                    "modules", "inputs"};
         if (!known.count(kv.first.Scalar()))
           fail(kv.first, "unknown device key \"" + kv.first.Scalar() + "\"");
       }
@@ -112,8 +115,8 @@ struct Parser {
             xml, (std::filesystem::path(root->path()) / esi_file).string(), sel));
         if (alias) esi_proto->description.config.station_alias = *alias;
       } else {
-        if (d["device"] || d["product_code"] || d["revision"] || d["modules"])
-          fail(d, "device:/product_code:/revision:/modules: belong to an esi: device");
+        if (d["device"] || d["product_code"] || d["revision"] || d["modules"] || d["inputs"])
+          fail(d, "device:/product_code:/revision:/modules:/inputs: belong to an esi: device");
         if (alias)
           fail(d["alias"], "alias: on a rack: device is not supported (set it in the rack)");
         const std::string rack_file = d["rack"].Scalar();
@@ -134,6 +137,7 @@ struct Parser {
         if (esi_proto) {
           ld.esi = std::make_unique<device::EsiDevice>(*esi_proto);
           ld.esi->description.serial = static_cast<uint32_t>(k);
+          if (d["inputs"]) ld.inputs = parse_inputs(d["inputs"], *ld.esi);
         } else {
           ld.rack = std::make_unique<mdp::RackConfig>(*rack_proto);
         }
@@ -145,6 +149,72 @@ struct Parser {
       if (!wiring.IsSequence()) fail(wiring, "wiring: is a list of wires");
       for (const auto& w : wiring) parse_wire(w, by_name, out);
       check_cycles(out, wiring);
+    }
+    return out;
+  }
+
+  // inputs: [{bit, bits, source, signed, scale, <the source's parameters>}] (modules/signals
+  // source_factory.hpp); each copy of a device gets its own sources.
+  std::vector<LineInput> parse_inputs(const YAML::Node& list, const device::EsiDevice& esi) const {
+    if (!list.IsSequence()) fail(list, "inputs: is a list of {bit, bits, source, ...}");
+    const size_t in_bits = 8u * device::GenericDevice(esi).process_data_sizes().inputs;
+    std::vector<LineInput> out;
+    for (const auto& n : list) {
+      if (!n.IsMap()) fail(n, "an input is {bit:, bits:, source:, ...the source's parameters}");
+      LineInput in;
+      in.line = static_cast<size_t>(n.Mark().line) + 1;
+      in.bit = n["bit"] ? static_cast<size_t>(integer(n["bit"], "bit")) : 0;
+      if (!n["bits"]) fail(n, "input without bits:");
+      const auto bits = integer(n["bits"], "bits");
+      if (bits < 1 || bits > 64) fail(n["bits"], "bits must be 1..64");
+      in.bits = static_cast<size_t>(bits);
+      if (!n["source"]) fail(n, "input without source: (constant, ramp, sine, noise, clock, ...)");
+      if (in.bit + in.bits > in_bits)
+        fail(n, "input bits " + std::to_string(in.bit) + ".." +
+                    std::to_string(in.bit + in.bits - 1) + " but the device has " +
+                    std::to_string(in_bits) + " input bits");
+      for (const auto& other : out)
+        if (other.bit < in.bit + in.bits && in.bit < other.bit + other.bits)
+          fail(n, "input bits already driven by the source on line " + std::to_string(other.line));
+      modules::SourceParams params;
+      for (auto kv : n) {
+        const std::string key = kv.first.Scalar();
+        if (key == "bit" || key == "bits" || key == "source") continue;
+        if (!kv.second.IsScalar()) fail(kv.second, key + ": is a scalar");
+        if (key == "signed") {
+          in.is_signed = kv.second.as<bool>(true);
+          continue;
+        }
+        if (key == "scale") {
+          try {
+            in.scale = std::stod(kv.second.Scalar());
+          } catch (const std::exception&) {
+            fail(kv.second, "scale: is a number");
+          }
+          continue;
+        }
+        params[key] = kv.second.Scalar();
+      }
+      modules::SourceContext ctx;
+      ctx.output = [](uint8_t, uint8_t, uint8_t) {
+        return modules::OutputRef{nullptr, "rack channels are not in a line file's inputs"};
+      };
+      ctx.module_position = [](uint16_t, uint8_t&, uint8_t&) { return false; };
+      ctx.plant = [&](const std::string&,
+                      const modules::SourceParams&) -> modules::StateSpacePlant& {
+        fail(n, "source plant is not supported for an ESI device's inputs");
+      };
+      ctx.read_file = [this](const std::string& f, size_t max) { return root->read(f, max); };
+      const std::string kind = n["source"].Scalar();
+      if (kind == "loopback" || kind == "plant")
+        fail(n["source"],
+             "source " + kind + " is not supported for an ESI device's inputs (use wiring:)");
+      try {
+        in.source = modules::make_source(kind, params, ctx);
+      } catch (const std::exception& e) {
+        fail(n, std::string("source ") + kind + ": " + e.what());
+      }
+      out.push_back(std::move(in));
     }
     return out;
   }
@@ -187,6 +257,9 @@ struct Parser {
       fail(w, "wire writes input bits " + std::to_string(wire.to_bit) + ".." +
                   std::to_string(wire.to_bit + wire.bits - 1) + " but the device has " +
                   std::to_string(in_bits) + " input bits");
+    for (const auto& in : to.inputs)
+      if (in.bit < wire.to_bit + wire.bits && wire.to_bit < in.bit + in.bits)
+        fail(w, "input bits already driven by the source on line " + std::to_string(in.line));
     for (const auto& other : out.wiring) {
       if (other.to == wire.to && other.to_bit < wire.to_bit + wire.bits &&
           wire.to_bit < other.to_bit + other.bits)
@@ -222,6 +295,20 @@ struct Parser {
 };
 
 }  // namespace
+
+// Runs on the cyclic path: no allocation.
+uint64_t LineInput::code(double value) const {
+  if (bits == 1) return value >= 0.5 ? 1 : 0;
+  const double v = std::round(value * scale);
+  if (is_signed) {
+    const double hi = std::ldexp(1.0, static_cast<int>(bits) - 1) - 1;
+    const double lo = -hi - 1;
+    const auto c = static_cast<int64_t>(std::isnan(v) ? 0 : std::clamp(v, lo, hi));
+    return static_cast<uint64_t>(c);
+  }
+  const double hi = std::ldexp(1.0, static_cast<int>(bits)) - 1;
+  return static_cast<uint64_t>(std::isnan(v) ? 0 : std::clamp(v, 0.0, hi));
+}
 
 LineFile parse_line_file(const std::string& yaml_text, const std::string& path) {
   Parser p;

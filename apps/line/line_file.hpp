@@ -6,6 +6,9 @@
 //       name: di                   #   optional, for wiring
 //       alias: 0x10                #   optional station alias (SII word 4, ETG.2010 Table 2)
 //       count: 2                   #   optional, consecutive copies (serial 0..count-1)
+//       modules: [RM-DI4, 0x2]     #   ETG.5001 modular device: the modules of its slots
+//       inputs:                    #   optional, input fields driven by signal sources
+//         - {bit: 0, bits: 16, source: sine, amplitude: 1000, period_s: 2}
 //     - rack: rack.yaml            # ... or a Fusion.IO rack file
 //   wiring:                        # outputs of one device looped back to inputs of another
 //     - {from: do, from_bit: 0, to: di, to_bit: 0, bits: 8}
@@ -24,8 +27,22 @@
 #include "device/esi_device.hpp"
 #include "device/generic_device.hpp"
 #include "mdp/rack_config.hpp"
+#include "modules/signals/signal_source.hpp"
 
 namespace rackcat::apps {
+
+// An input field of an ESI device driven by one of the rack's signal sources (modules/signals:
+// constant, ramp, sine, noise, clock, replay; docs/LINE.md "Signal sources"): every cycle bits
+// [bit, bit + bits) of its inputs (SM3 layout, LSB first) carry the source's value then.
+struct LineInput {
+  size_t bit = 0, bits = 0;
+  bool is_signed = true;  // a field of 2..64 bits: two's complement (else unsigned)
+  double scale = 1.0;     // code = round(value x scale), clamped to the field
+  std::shared_ptr<modules::Source> source;
+  size_t line = 0;
+  // The field's code for the source's value `value`: one bit is 1 from 0.5 on.
+  uint64_t code(double value) const;
+};
 
 struct LineDevice {
   std::string name;  // from the file, or "" ; copies get "<name>#<k>" for k > 0
@@ -33,6 +50,7 @@ struct LineDevice {
   // Exactly one of:
   std::unique_ptr<device::EsiDevice> esi;
   std::unique_ptr<mdp::RackConfig> rack;
+  std::vector<LineInput> inputs;  // esi: devices only
 };
 
 struct LineWire {

@@ -82,7 +82,7 @@ TEST_F(EniFileTest, BuildsTheSameLineAsTheLineFile) {
   const auto from_line =
       load_line_file(write("esi/line.yaml",
                            "devices:\n"
-                           "  - {esi: rackcat-test-devices.xml, device: RC1100}\n"
+                           "  - {esi: rackcat-test-devices.xml, device: RC1100, alias: 0x100}\n"
                            "  - {esi: rackcat-test-devices.xml, device: RC1008}\n"
                            "  - {esi: rackcat-test-devices.xml, device: RC2008}\n"
                            "  - {esi: rackcat-test-devices.xml, device: RC3102}\n"
@@ -105,6 +105,65 @@ TEST_F(EniFileTest, BuildsTheSameLineAsTheLineFile) {
   ASSERT_TRUE(from_eni.devices[4].rack);
   EXPECT_EQ(from_eni.devices[4].rack->control.product_code, 0x00464E01u);
   EXPECT_EQ(from_eni.devices[3].name, "Term 4 (RC3102)");
+}
+
+// Info/Identification with ADO 0x0012: the station alias, SII word 4 (ETG.2010 Table 2).
+TEST_F(EniFileTest, IdentificationBecomesTheStationAlias) {
+  const auto line = load(eni_);
+  EXPECT_EQ(line.devices[0].esi->description.config.station_alias, 0x100);
+  const device::GenericDevice g(*line.devices[0].esi);
+  EXPECT_EQ(g.eeprom()[8], 0x00);
+  EXPECT_EQ(g.eeprom()[9], 0x01);
+}
+
+TEST_F(EniFileTest, IdentificationByAnotherRegister) {
+  std::string eni = eni_;
+  replace(eni, "<Ado>#x0012</Ado>", "<Ado>#x0134</Ado>");
+  expect_error(eni, line_of(eni, "<Ado>#x0134"), "identification by ADO #x0134 is not emulated");
+}
+
+// A modular device's modules: the 0xF030 list its CoE init commands download (ETG.5001.1).
+std::string modular_eni(const std::string& init_cmds) {
+  return "<EtherCATConfig><Config>\n"
+         "<Slave><Info><Name>Head</Name><VendorId>3612</VendorId><ProductCode>#x5001</ProductCode>"
+         "<RevisionNo>#x10000</RevisionNo></Info>\n"
+         "<Mailbox><CoE><InitCmds>\n" +
+         init_cmds +
+         "</InitCmds></CoE></Mailbox></Slave>\n"
+         "</Config></EtherCATConfig>\n";
+}
+
+TEST_F(EniFileTest, ModulesFromTheConfiguredModuleIdentList) {
+  const std::string cmd =
+      "<InitCmd CompleteAccess=\"true\"><Transition>PS</Transition><Index>#xF030</Index>"
+      "<SubIndex>0</SubIndex><Data>02000200000001000000</Data></InitCmd>\n";
+  const auto line = load(modular_eni(cmd));
+  ASSERT_EQ(line.devices.size(), 1u);
+  const auto& esi = *line.devices[0].esi;
+  EXPECT_EQ(esi.module_idents, (std::vector<uint32_t>{2, 1}));
+  EXPECT_NE(esi.dictionary.find(0x7000), nullptr);
+  EXPECT_NE(esi.dictionary.find(0x6010), nullptr);
+  // Entry by entry, the count last.
+  const std::string entries =
+      "<InitCmd><Transition>PS</Transition><Index>#xF030</Index><SubIndex>1</SubIndex>"
+      "<Data>01000000</Data></InitCmd>\n"
+      "<InitCmd><Transition>PS</Transition><Index>#xF030</Index><SubIndex>0</SubIndex>"
+      "<Data>01</Data></InitCmd>\n";
+  EXPECT_EQ(load(modular_eni(entries)).devices[0].esi->module_idents, (std::vector<uint32_t>{1}));
+}
+
+TEST_F(EniFileTest, UnknownModuleInTheConfiguredList) {
+  const std::string eni = modular_eni(
+      "<InitCmd CompleteAccess=\"true\"><Transition>PS</Transition><Index>#xF030</Index>"
+      "<SubIndex>0</SubIndex><Data>010007000000</Data></InitCmd>\n");
+  expect_error(eni, line_of(eni, "<InitCmd Complete"), "unknown module \"#x00000007\"");
+}
+
+TEST_F(EniFileTest, ConfiguredListWithoutItsEntries) {
+  const std::string eni = modular_eni(
+      "<InitCmd><Transition>PS</Transition><Index>#xF030</Index><SubIndex>0</SubIndex>"
+      "<Data>02</Data></InitCmd>\n");
+  expect_error(eni, line_of(eni, "<InitCmd><"), "no init command sets subindex 1");
 }
 
 TEST_F(EniFileTest, TheEnisAssignmentBecomesTheStartUpAssignment) {

@@ -94,6 +94,49 @@ TEST_F(LineFileTest, ModuleNotAllowedInTheSlot) {
       5, "is not allowed in slot position 1");
 }
 
+// Signal sources (modules/signals) on an ESI device's input fields.
+TEST_F(LineFileTest, SignalSourcesOnInputs) {
+  auto line = load_line_file(write(
+      "devices:\n"
+      "  - esi: devices.xml\n"
+      "    product_code: 0x3102\n"
+      "    count: 2\n"
+      "    inputs:\n"
+      "      - {bit: 16, bits: 16, source: sine, amplitude: 1000, period_s: 2}\n"
+      "      - {bit: 0, bits: 1, source: constant, value: 1}\n"
+      "  - esi: devices.xml\n"
+      "    device: RC1008\n"
+      "    inputs: [{bits: 8, source: ramp, from: 0, to: 255, period_s: 1, signed: false}]\n"));
+  ASSERT_EQ(line.devices.size(), 3u);
+  ASSERT_EQ(line.devices[0].inputs.size(), 2u);
+  const auto& sine = line.devices[0].inputs[0];
+  EXPECT_EQ(sine.bit, 16u);
+  EXPECT_EQ(sine.line, 6u);
+  // Each copy has its own source.
+  EXPECT_NE(line.devices[1].inputs[0].source, sine.source);
+  EXPECT_EQ(sine.code(-1000.4), static_cast<uint64_t>(-1000) & 0xFFFFFFFFFFFFFFFF);
+  EXPECT_EQ(sine.code(1e9), 32767u);
+  EXPECT_EQ(static_cast<int64_t>(sine.code(-1e9)), -32768);
+  EXPECT_EQ(line.devices[0].inputs[1].code(0.6), 1u);
+  EXPECT_EQ(line.devices[0].inputs[1].code(0.4), 0u);
+  const auto& ramp = line.devices[2].inputs[0];
+  EXPECT_EQ(ramp.code(300), 255u);
+  EXPECT_EQ(ramp.code(-3), 0u);
+}
+
+TEST_F(LineFileTest, SignalSourceErrors) {
+  const std::string head = "devices:\n  - esi: devices.xml\n    device: RC1008\n    inputs:\n";
+  expect_error(head + "      - {bits: 8, source: wobble}\n", 5, "source wobble");
+  expect_error(head + "      - {bit: 4, bits: 8, source: constant, value: 1}\n", 5,
+               "input bits 4..11 but the device has 8 input bits");
+  expect_error(head + "      - {bits: 8, source: loopback}\n", 5, "use wiring:");
+  expect_error(head + "      - {bits: 8, source: sine, amplitude: x}\n", 5, "source sine");
+  expect_error(head +
+                   "      - {bits: 4, source: constant, value: 1}\n"
+                   "      - {bit: 2, bits: 4, source: constant, value: 1}\n",
+               6, "already driven by the source on line 5");
+}
+
 TEST_F(LineFileTest, MissingEsiDevice) {
   // The ESI's own error, naming the ESI file.
   const auto path = write("devices:\n  - {esi: devices.xml, device: NOPE}\n");

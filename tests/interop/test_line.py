@@ -111,6 +111,84 @@ def test_line_reaches_op_with_esi_identities_and_loopback(ecat_segment, tmp_path
     assert slave.stop() == 0, slave.log()
 
 
+SOURCES_LINE = """\
+devices:
+  - esi: rackcat-test-devices.xml
+    product_code: 0x3102
+    name: ai
+    inputs:
+      - {bit: 16, bits: 16, source: ramp, from: 0, to: 30000, period_s: 1}
+  - esi: rackcat-test-devices.xml
+    device: RC1008
+    inputs:
+      - {bits: 8, source: constant, value: 165, signed: false}
+  - esi: rackcat-test-devices.xml
+    device: RC5001
+    modules: [RM-DI4, RM-DO4]
+    inputs:
+      - {bits: 4, source: constant, value: 9, signed: false}
+"""
+
+
+def test_signal_sources_and_a_modular_device_with_its_modules(ecat_segment, tmp_path):
+    """Signal sources of the line file drive ESI devices' inputs (a ramp on the analog
+    terminal's channel 1 value, a constant on the DI), and the ETG.5001 device RC5001 runs with
+    the modules the line file chose (RM-DI4 in slot 1, RM-DO4 in slot 2): pysoem maps 1 byte
+    each way, reads 0xF030/0xF050 and the module objects at their slot indices, reaches OP and
+    sees the sources in the process image."""
+    work = tmp_path / "line"
+    work.mkdir()
+    shutil.copy(DATA / "rackcat-test-devices.xml", work)
+    (work / "line.yaml").write_text(SOURCES_LINE)
+    q = shlex.quote
+    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --line {q(str(work / 'line.yaml'))} "
+           f"--no-control --no-pty --state-dir {q(str(tmp_path / 'state'))}")
+    iface, slave = ecat_segment(slaves=3, cmd=cmd, pcap=False)
+    master = pysoem.Master()
+    master.open(iface)
+    try:
+        assert master.config_init() == 3
+        s = master.slaves
+        mod = s[2]
+        assert mod.id == 0x5001
+        for index in (0xF030, 0xF050):
+            assert mod.sdo_read(index, 0)[0] == 2
+            assert int.from_bytes(mod.sdo_read(index, 1), "little") == 1  # RM-DI4
+            assert int.from_bytes(mod.sdo_read(index, 2), "little") == 2  # RM-DO4
+        od = {obj.index: obj.name for obj in mod.od}
+        assert od[0x6000] == b"DI4 inputs" and od[0x7010] == b"DO4 outputs", od
+        assert 0x7000 not in od and 0x6010 not in od
+        master.config_map()
+        sizes = [(len(x.output), len(x.input)) for x in s]
+        assert sizes == [(0, 8), (0, 1), (1, 1)], sizes
+        master.state = pysoem.SAFEOP_STATE
+        master.write_state()
+        assert master.state_check(pysoem.SAFEOP_STATE, 3_000_000) == pysoem.SAFEOP_STATE, \
+            [(x.name, hex(x.state), hex(x.al_status)) for x in s]
+        cycle(master)
+        master.state = pysoem.OP_STATE
+        master.write_state()
+        deadline = time.monotonic() + 10
+        while master.state_check(pysoem.OP_STATE, 1000) != pysoem.OP_STATE:
+            cycle(master)
+            assert time.monotonic() < deadline, \
+                [(x.name, hex(x.state), hex(x.al_status)) for x in s]
+        values = set()
+        deadline = time.monotonic() + 3
+        while time.monotonic() < deadline and len(values) < 5:
+            cycle(master)
+            values.add(int.from_bytes(s[0].input[2:4], "little", signed=True))
+            assert s[1].input[0] == 165
+            assert s[2].input[0] & 0x0F == 9
+            time.sleep(0.01)
+        assert len(values) >= 5 and all(0 <= v <= 30000 for v in values), values
+        master.state = pysoem.INIT_STATE
+        master.write_state()
+    finally:
+        master.close()
+    assert slave.stop() == 0, slave.log()
+
+
 def test_eni_builds_the_same_line(ecat_segment, tmp_path):
     """The hand-written ENI of this line (tests/apps/data/test-line.eni.xml), with the ESI and
     the rack file looked up by identity in --esi-dir, gives the same slaves: identities, names,
