@@ -243,9 +243,9 @@ class EniReader {
           fail(c, "0xF030 complete access: " + std::to_string(data.size()) +
                       " bytes, not 2 + 4 x the count in its first byte");
         entries.clear();
-        for (uint8_t k = 1; k <= data[0]; ++k) {
-          const size_t at = 2 + 4 * (k - 1u);
-          entries[k] = {
+        for (size_t k = 1; k <= data[0]; ++k) {
+          const size_t at = 2 + 4 * (k - 1);
+          entries[static_cast<uint8_t>(k)] = {
               static_cast<uint32_t>(data[at] | (data[at + 1] << 8) | (data[at + 2] << 16) |
                                     (static_cast<uint32_t>(data[at + 3]) << 24)),
               line};
@@ -271,8 +271,8 @@ class EniReader {
       return std::nullopt;
     }
     std::vector<device::ModuleChoice> out;
-    for (uint8_t k = 1; k <= *count; ++k) {
-      auto it = entries.find(k);
+    for (size_t k = 1; k <= *count; ++k) {
+      auto it = entries.find(static_cast<uint8_t>(k));
       if (it == entries.end())
         throw device::FileError(file_, count_line,
                                 "0xF030 lists " + std::to_string(*count) +
