@@ -152,6 +152,7 @@ void print_json(coe::ObjectDictionary& od) {
                          {"access_bits", e.access},
                          {"pdo", pdo_text(e.access)},
                          {"padding", e.padding},
+                         {"unit", e.unit ? fmt::format("0x{:08X}", e.unit) : std::string()},
                          {"value", value_text(od, o, e)}});
     }
     objects.push_back({{"index", fmt::format("0x{:04X}", o.index())},

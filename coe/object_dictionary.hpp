@@ -50,13 +50,15 @@ struct Entry {
   std::optional<int64_t> min;          // integer range check on write (nullopt = type range)
   std::optional<int64_t> max;
   bool padding = false;  // a gap entry: counted in the layout, never addressed by SDO
-  std::string unit;      // optional, for descriptions
+  // ETG.1004 unit code (coe/unit_code.hpp) the ESI gives the entry, 0 = none.
+  uint32_t unit = 0;
   // Paired limits (abort 0x06090036 "maximum value is less than minimum value"): when
   // non-zero, this entry is the maximum of the pair and subindex `max_of` holds the minimum
   // (a write below it aborts), or this entry is the minimum and `min_of` names the maximum.
   uint8_t max_of = 0;
   uint8_t min_of = 0;
-  // Unit type index for SDO Information entry descriptions (ETG.1000.6 §5.6.3.6.2), 0 = none.
+  // The UNSIGNED16 unit type of SDO Information entry descriptions (ETG.1000.6 §5.6.3.6.2),
+  // 0 = none. How it relates to the 32-bit `unit` is not in our references (docs/MDP.md Units).
   uint16_t unit_type = 0;
 
   DataType type() const { return static_cast<DataType>(data_type); }

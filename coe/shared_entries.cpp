@@ -39,7 +39,7 @@ uint64_t hash_of(const std::vector<Entry>& entries) {
     h.value(e.min.value_or(0x5A5A5A5A5A5A5A5All));
     h.value(e.max.value_or(0x5A5A5A5A5A5A5A5All));
     h.value(e.padding);
-    h.text(e.unit);
+    h.value(e.unit);
     h.value(e.max_of);
     h.value(e.min_of);
     h.value(e.unit_type);

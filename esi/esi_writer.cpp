@@ -10,6 +10,7 @@
 #include "coe/access.hpp"
 #include "coe/data_type.hpp"
 #include "coe/diagnosis_history.hpp"
+#include "coe/unit_code.hpp"
 #include "mdp/diagnosis_catalogue.hpp"
 
 namespace rackcat::esi {
@@ -102,6 +103,7 @@ class DictionaryWriter {
       if (skip != nullptr && skip->count(obj.index()) != 0) return;
       if (!coe::is_enum_type(obj.index())) write_object(obj);
     });
+    write_unit_types();
   }
 
  private:
@@ -157,7 +159,34 @@ class DictionaryWriter {
     if (access & coe::access::kSettings) f.append_child("Setting").text().set(1);
   }
 
+  // The entry's values (default, range) and its ETG.1004 unit, in ObjectInfoType order.
   void default_info(pugi::xml_node info, const coe::Object& obj, const coe::Entry& e) {
+    value_info(info, obj, e);
+    if (e.unit != 0) {
+      text_child(info, "Unit", esi_hex(e.unit, 8));
+      units_.insert(coe::unit::numerator(e.unit));
+      units_.insert(coe::unit::denominator(e.unit));
+    }
+  }
+
+  // ETG.2000 DictionaryType/UnitTypes (before DataTypes): name and symbol of every notation
+  // index an entry's Unit uses (coe/unit_code.hpp), so a configurator shows "°C" without its
+  // own copy of the ETG.1004 table.
+  void write_unit_types() {
+    units_.erase(coe::unit::kNone);
+    if (units_.empty()) return;
+    auto list = types_.parent().insert_child_before("UnitTypes", types_);
+    for (uint8_t index : units_) {
+      const auto n = coe::unit::notation(index);
+      if (!n) continue;  // every code rackcat writes is built from kNotations
+      auto u = list.append_child("UnitType");
+      text_child(u, "NotationIndex", esi_hex(index, 2));
+      text_child(u, "Name", std::string(n->name));
+      text_child(u, "Symbol", std::string(n->symbol));
+    }
+  }
+
+  void value_info(pugi::xml_node info, const coe::Object& obj, const coe::Entry& e) {
     if (!is_readable(e.access)) return;
     auto value = entry_value(obj, e);
     if (e.type() == coe::DataType::VisibleString) {
@@ -297,6 +326,7 @@ class DictionaryWriter {
   pugi::xml_node types_;
   pugi::xml_node objects_;
   std::set<std::string> declared_;
+  std::set<uint8_t> units_;  // notation indices the Units use
 };
 
 pugi::xml_node write_profile(pugi::xml_node parent, const char* element,

@@ -38,9 +38,11 @@ Object device_information(const RackConfig& cfg) {
             cfg.detect_modules_override ? 1 : 0));
   o.add(pad(0x0C, 15));
   o.add(real(0x0D, "Fan Status (CPU Zone)", acc("ro") | kTx, 0.0f));
-  o.add(real(0x0E, "Fan RPM (CPU Zone)", acc("ro") | kTx, kNominalFanRpm));
+  o.add(with_unit(real(0x0E, "Fan RPM (CPU Zone)", acc("ro") | kTx, kNominalFanRpm),
+                  coe::unit::kRpm));
   // Appendix A names it "Temperature (Slot Zone)", Table 1 and §4.8 "CPU zone": CPU it is.
-  o.add(real(0x0F, "Temperature (CPU Zone)", acc("ro") | kTx, kInitialCpuTemperature));
+  o.add(with_unit(real(0x0F, "Temperature (CPU Zone)", acc("ro") | kTx, kInitialCpuTemperature),
+                  coe::unit::kCelsius));
   o.finalize();
   o.hooks.validate_write = [](const Object& obj, int subindex, std::span<const uint8_t> data,
                               EsmState) {
@@ -83,10 +85,12 @@ Object rim_information(const Rim& r) {
              r.power_supply_fan ? 0.0f : kNoFanStatus));
   o.add(real(0x0B, "Fan Status (Slot Card Zone)", acc("ro") | kTx,
              r.slot_card_fan ? 0.0f : kNoFanStatus));
-  o.add(real(0x0C, "Fan RPM (Power Supply Zone)", acc("ro") | kTx,
-             r.power_supply_fan ? kNominalFanRpm : 0.0f));
-  o.add(real(0x0D, "Fan RPM (Slot Card Zone)", acc("ro") | kTx,
-             r.slot_card_fan ? kNominalFanRpm : 0.0f));
+  o.add(with_unit(real(0x0C, "Fan RPM (Power Supply Zone)", acc("ro") | kTx,
+                       r.power_supply_fan ? kNominalFanRpm : 0.0f),
+                  coe::unit::kRpm));
+  o.add(with_unit(real(0x0D, "Fan RPM (Slot Card Zone)", acc("ro") | kTx,
+                       r.slot_card_fan ? kNominalFanRpm : 0.0f),
+                  coe::unit::kRpm));
   o.finalize();
   return o;
 }
@@ -103,8 +107,8 @@ Object module_information(const Module& m) {
   o.add(num(0x06, "IO Channel Low", DataType::Integer16, acc("ro"), m.channel_low));
   o.add(num(0x07, "IO Channel High", DataType::Integer16, acc("ro"), m.channel_high));
   // Appendix A order (08 max, 09 min); Table 6 lists them the other way round.
-  o.add(real(0x08, "Max Voltage", acc("ro"), c.max_voltage));
-  o.add(real(0x09, "Min Voltage", acc("ro"), c.min_voltage));
+  o.add(with_unit(real(0x08, "Max Voltage", acc("ro"), c.max_voltage), coe::unit::kVolts));
+  o.add(with_unit(real(0x09, "Min Voltage", acc("ro"), c.min_voltage), coe::unit::kVolts));
   o.finalize();
   return o;
 }

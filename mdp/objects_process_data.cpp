@@ -21,9 +21,15 @@ Object io_object(const Module& m, const IoLayout& l) {
   if (has_pad) o.set_packed(true);
   const uint16_t a = l.output ? (acc("rw") | kRx) : (acc("ro") | kTx);
   o.add(sub0(static_cast<uint8_t>(l.entries + (has_pad ? 1 : 0))));
+  // Thermocouple and RTD channels carry rackcat's temperature word, 0.1 °C per bit
+  // (docs/MODULES.md "16-bit temperature scaling"). The analog codes are fractions of the
+  // card's full scale (not a power of ten of a unit), which an ETG.1004 code cannot express.
+  const bool temperature = m.card->signal == Signal::Thermocouple || m.card->signal == Signal::Rtd;
   for (uint8_t s = 1; s <= l.entries; ++s) {
-    o.add(coe::make_entry(s, l.entry_name(s), l.type_of(s), l.bits_of(s), a,
-                          std::vector<uint8_t>((l.bits_of(s) + 7) / 8, 0)));
+    Entry e = coe::make_entry(s, l.entry_name(s), l.type_of(s), l.bits_of(s), a,
+                              std::vector<uint8_t>((l.bits_of(s) + 7) / 8, 0));
+    if (temperature && !l.output) e.unit = coe::unit::kDeciCelsius;
+    o.add(std::move(e));
   }
   if (has_pad) o.add(pad(static_cast<uint8_t>(l.entries + 1), l.pad_bits));
   o.finalize();

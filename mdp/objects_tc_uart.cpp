@@ -131,7 +131,10 @@ void add_tc_uart_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
                static_cast<uint16_t>(DataType::Unsigned16));
       o.add(sub0(m.card->channels));
       for (uint8_t c = 1; c <= m.card->channels; ++c) {
-        o.add(num(c, "Ohms[" + std::to_string(c) + "]", DataType::Unsigned16, acc("ro") | kTx));
+        // Guide §2.6: "The value reported is in Ohms".
+        o.add(with_unit(
+            num(c, "Ohms[" + std::to_string(c) + "]", DataType::Unsigned16, acc("ro") | kTx),
+            coe::unit::kOhms));
       }
       od.add(std::move(o));
     }

@@ -13,6 +13,7 @@
 
 #include "coe/access.hpp"
 #include "coe/object_dictionary.hpp"
+#include "coe/unit_code.hpp"
 
 namespace rackcat::mdp::detail {
 
@@ -65,6 +66,12 @@ inline Entry real(uint8_t sub, std::string name, uint16_t access, float def = 0.
   static_assert(sizeof raw == sizeof def);
   std::memcpy(&raw, &def, sizeof raw);
   e.default_value = le_bytes(raw, 4);
+  return e;
+}
+
+// The entry with its ETG.1004 unit (coe/unit_code.hpp), for the ESI.
+inline Entry with_unit(Entry e, uint32_t unit) {
+  e.unit = unit;
   return e;
 }
 

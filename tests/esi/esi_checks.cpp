@@ -104,6 +104,7 @@ void expect_dictionary_matches(const pugi::xml_node& device, const coe::ObjectDi
       std::string type;
       unsigned bits, offset;
       pugi::xml_node flags;
+      std::string name;  // empty for the elements of an array type
     };
     std::map<unsigned, Sub> subs;
     for (auto si : dt.children("SubItem")) {
@@ -116,13 +117,13 @@ void expect_dictionary_matches(const pugi::xml_node& device, const coe::ObjectDi
         unsigned bits = arr.child("BitSize").text().as_uint() / n;
         unsigned offs = si.child("BitOffs").text().as_uint();
         for (unsigned k = 0; k < n; ++k)
-          subs[lbound + k] = {arr.child_value("BaseType"), bits, offs + k * bits,
-                              si.child("Flags")};
+          subs[lbound + k] = {arr.child_value("BaseType"), bits, offs + k * bits, si.child("Flags"),
+                              ""};
         continue;
       }
       subs[si.child("SubIdx").text().as_uint()] = {sit, si.child("BitSize").text().as_uint(),
                                                    si.child("BitOffs").text().as_uint(),
-                                                   si.child("Flags")};
+                                                   si.child("Flags"), si.child_value("Name")};
     }
     size_t addressable = 0;
     for (const auto& e : obj->entries()) {
@@ -137,6 +138,14 @@ void expect_dictionary_matches(const pugi::xml_node& device, const coe::ObjectDi
       EXPECT_EQ(it->second.type, esi_type_name(od, e)) << ewhere;
       EXPECT_EQ(it->second.bits, e.bit_length) << ewhere;
       EXPECT_EQ(it->second.offset, e.bit_offset) << ewhere;
+      // Issue 15 item 10: the name SDO Information gives (subindex 0 included), made unique
+      // with " (SubIndex nnn)" where the schema's SubItemKey needs it.
+      if (!it->second.name.empty() && it->second.name != e.name) {
+        EXPECT_EQ(it->second.name.rfind(e.name.empty() ? "Entry" : e.name, 0), 0u) << ewhere;
+        EXPECT_NE(it->second.name.find(fmt::format("(SubIndex {:03d})", e.subindex)),
+                  std::string::npos)
+            << ewhere << ": " << it->second.name;
+      }
       expect_flags(it->second.flags, e.access, ewhere, true);
     }
     EXPECT_EQ(subs.size(), addressable) << where << ": ESI has other subindices";

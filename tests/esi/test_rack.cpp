@@ -133,6 +133,47 @@ TEST_P(RackEsi, ConfiguratorsSeeOverwritableSlotPdosTimeoutsEnumsAndSharedModule
   EXPECT_EQ(name.find("Inverted"), std::string::npos) << name;
 }
 
+// ETG.2000 ObjectInfoType/Unit: the entries whose unit the guide states carry the ETG.1004 code
+// (prefix << 24 | numerator << 16 | denominator << 8, CiA 303-2 notation indices: volt 0x26,
+// ohm 0x28, degree Celsius 0x2D, revolution 0xB4, minute 0x47), and every Dictionary declares
+// the notation indices its Units use in UnitTypes.
+TEST_P(RackEsi, UnitsAreEtg1004CodesDeclaredInTheDictionarysUnitTypes) {
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_string(write_esi(*device).c_str()));
+  auto unit_of = [&](const char* object, const char* sub) {
+    const auto xpath =
+        fmt::format("//Object[Name='{}']/Info/SubItem[Name='{}']/Info/Unit", object, sub);
+    return std::string(doc.select_node(xpath.c_str()).node().child_value());
+  };
+  EXPECT_EQ(unit_of("Device Information", "Temperature (CPU Zone)"), "#x002D0000");  // °C
+  EXPECT_EQ(unit_of("Device Information", "Fan RPM (CPU Zone)"), "#x00B44700");      // rev/min
+  EXPECT_EQ(unit_of("Device Information", "Fan Status (CPU Zone)"), "");  // percent: no code known
+  EXPECT_EQ(unit_of("Module Information", "Max Voltage"), "#x00260000");  // V
+  if (GetParam() == "default") {
+    EXPECT_EQ(unit_of("Thermocouple Info", "SubIndex 001"), "#x00280000");        // Ω
+    EXPECT_EQ(unit_of("Thermocouplex8 (inputs)", "SubIndex 001"), "#xFF2D0000");  // 0.1 °C
+    EXPECT_EQ(unit_of("AINx8 (inputs)", "SubIndex 001"), "");  // full-scale fraction
+  }
+  size_t units = 0;
+  for (auto d : doc.select_nodes("//Dictionary")) {
+    std::set<unsigned long> declared;
+    for (auto t : d.node().child("UnitTypes").children("UnitType")) {
+      declared.insert(std::stoul(t.child_value("NotationIndex") + 2, nullptr, 16));
+      EXPECT_STRNE(t.child_value("Symbol"), "");
+    }
+    for (auto u : d.node().select_nodes(".//Unit")) {
+      const auto code = std::stoul(u.node().child_value() + 2, nullptr, 16);
+      ++units;
+      for (unsigned long index : {(code >> 16) & 0xFF, (code >> 8) & 0xFF}) {
+        if (index != 0) {
+          EXPECT_TRUE(declared.count(index)) << std::hex << code;
+        }
+      }
+    }
+  }
+  EXPECT_GT(units, 0u);
+}
+
 TEST_P(RackEsi, SiiIdentityEqualsIdentityObjectAndEsiType) {
   auto info = parse_sii(build_sii(*device).span());
   const auto* identity = device->dictionary().find(0x1018);

@@ -5,6 +5,7 @@ SyncManagers the master finds, for the default rack and for a rack file.
 """
 import json
 import struct
+import time
 import xml.etree.ElementTree as ET
 
 import pytest
@@ -150,3 +151,61 @@ def test_sdo_information_on_the_wire_equals_rackcat_od(rackcat):
     # Wireshark decodes the fragmented SDO Information answers.
     check_capture(rc.pcap)
     assert problems == [], f"{len(problems)} differences:\n" + "\n".join(problems[:20])
+
+
+def raw_mailbox(slave, request, timeout_s=2.0):
+    """One mailbox exchange written with the master's own FPWR/FPRD primitives (pysoem has no
+    SDO Information call with value info): the request into SM0 (the whole SM, so its last byte
+    hands it over), then SM1 once its status says full (ETG.1000.4 §6.7.2 register 0x0805+8n)."""
+    sm0_start, sm0_len = struct.unpack("<HH", slave._fprd(0x0800, 4))
+    sm1_start, sm1_len = struct.unpack("<HH", slave._fprd(0x0808, 4))
+    slave._fpwr(sm0_start, request.ljust(sm0_len, b"\0"))
+    deadline = time.monotonic() + timeout_s
+    while not slave._fprd(0x080D, 1)[0] & 0x08:
+        assert time.monotonic() < deadline, "no mailbox reply"
+        time.sleep(0.002)
+    reply = slave._fprd(sm1_start, sm1_len)
+    length = struct.unpack_from("<H", reply, 0)[0]
+    return reply[6:6 + length]
+
+
+def test_units_in_esi_od_and_the_entry_description_layout(rackcat, tmp_path):
+    """Issue 18 units: `rackcat esi` gives 0x2000:0F the ETG.1004 code for degree Celsius
+    (0x002D0000) and declares notation index 0x2D in UnitTypes, `rackcat od` says the same, and an
+    SDO Information entry description with value info 0x08 (ETG.1000.6 §5.6.3.6) carries the
+    UNSIGNED16 unit type between the access word and the name, read by pysoem over veth. The
+    16-bit value is 0: what it holds for a 32-bit ETG.1004 code is not in our references
+    (docs/MDP.md "Units")."""
+    esi_file = tmp_path / "rack.xml"
+    rackcat_tool("esi", "-o", esi_file)
+    device = ET.parse(esi_file).getroot().find("./Descriptions/Devices/Device")
+    dictionary = device.find("./Profile/Dictionary")
+    temp = [s for o in dictionary.findall("./Objects/Object") if o.findtext("Index") == "#x2000"
+            for s in o.findall("./Info/SubItem") if s.findtext("Name") == "Temperature (CPU Zone)"]
+    assert [s.findtext("./Info/Unit") for s in temp] == ["#x002D0000"]
+    symbols = {ut.findtext("NotationIndex"): ut.findtext("Symbol")
+               for ut in dictionary.findall("./UnitTypes/UnitType")}
+    assert symbols.get("#x2D") == "\u00b0C", symbols
+    od = json.loads(rackcat_tool("od", "--format", "json").stdout)["objects"]
+    info = next(o for o in od if o["index"] == "0x2000")
+    assert next(e for e in info["entries"] if e["subindex"] == 0x0F)["unit"] == "0x002D0000"
+
+    rc = rackcat(extra=["--no-pty"])
+    master = open_master(rc.iface, 1)
+    try:
+        s = master.slaves[0]
+        # Mailbox header (length 10, address 0, priority 0, type 3 CoE, counter 5), CoE header
+        # service 8 (SDO Information), Get Entry Description request 0x2000:0F value info 0x08.
+        request = struct.pack("<HHBB", 10, 0, 0, 0x53) + bytes([0x00, 0x80, 0x05, 0x00, 0x00,
+                                                                  0x00, 0x00, 0x20, 0x0F, 0x08])
+        reply = raw_mailbox(s, request)
+        name = b"Temperature (CPU Zone)"
+        assert reply[:2] == b"\x00\x80" and reply[2] == 0x06, reply.hex()  # entry description
+        # index, subindex, value info, REAL32, 32 bits, ro + TxPDO, unit type 0, the name.
+        assert reply[6:] == bytes([0x00, 0x20, 0x0F, 0x08, 0x08, 0x00, 0x20, 0x00, 0x87, 0x00,
+                                   0x00, 0x00]) + name, reply.hex()
+        go(master, pysoem.INIT_STATE)
+    finally:
+        master.close()
+    rc.stop()
+    check_capture(rc.pcap)
