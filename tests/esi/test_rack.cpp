@@ -174,6 +174,55 @@ TEST_P(RackEsi, UnitsAreEtg1004CodesDeclaredInTheDictionarysUnitTypes) {
   EXPECT_GT(units, 0u);
 }
 
+// Octet arrays (the guide's "ARRAY [0..n] OF BYTE" command entries and sample arrays) are
+// OCTET_STRING(n) in the ESI, as SDO Information describes them (data type 0x000A, 8n bits):
+// the DataType's BitSize is 8n and a DefaultData holds exactly n bytes.
+TEST_P(RackEsi, OctetArraysAgreeWithSdoInformation) {
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_string(write_esi(*device).c_str()));
+  size_t strings = 0, defaults = 0;
+  for (auto d : doc.select_nodes("//Dictionary")) {
+    std::map<std::string, pugi::xml_node> types;
+    for (auto t : d.node().child("DataTypes").children("DataType"))
+      types[t.child_value("Name")] = t;
+    auto octets = [](const std::string& type) -> unsigned {
+      if (type.rfind("OCTET_STRING(", 0) != 0) return 0;
+      return static_cast<unsigned>(std::stoul(type.substr(13)));
+    };
+    for (const auto& [name, t] : types) {
+      if (const unsigned n = octets(name)) {
+        ++strings;
+        EXPECT_EQ(t.child("BitSize").text().as_uint(), 8 * n) << name;
+      }
+    }
+    for (auto o : d.node().child("Objects").children("Object")) {
+      const std::string type = o.child_value("Type");
+      if (const unsigned n = octets(type)) {  // a VAR object
+        if (o.child("Info").child("DefaultData")) {
+          ++defaults;
+          EXPECT_EQ(std::string(o.child("Info").child_value("DefaultData")).size(), 2u * n);
+        }
+        continue;
+      }
+      auto dt = types[type];
+      for (auto si : o.child("Info").children("SubItem")) {
+        std::string sub_type;
+        for (auto s : dt.children("SubItem")) {
+          if (std::string(s.child_value("Name")) == si.child_value("Name"))
+            sub_type = s.child_value("Type");
+        }
+        const unsigned n = octets(sub_type);
+        if (n == 0 || !si.child("Info").child("DefaultData")) continue;
+        ++defaults;
+        EXPECT_EQ(std::string(si.child("Info").child_value("DefaultData")).size(), 2u * n)
+            << o.child_value("Index") << " " << si.child_value("Name");
+      }
+    }
+  }
+  EXPECT_GT(strings, 0u);
+  EXPECT_GT(defaults, 0u);
+}
+
 TEST_P(RackEsi, SiiIdentityEqualsIdentityObjectAndEsiType) {
   auto info = parse_sii(build_sii(*device).span());
   const auto* identity = device->dictionary().find(0x1018);
