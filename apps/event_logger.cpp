@@ -11,8 +11,8 @@
 #include <string_view>
 
 #include "base/esm_state.hpp"
+#include "base/mailbox_error.hpp"
 #include "coe/abort_code.hpp"
-#include "coe/mailbox_error.hpp"
 #include "ecat/al_status_code.hpp"
 
 namespace rackcat::apps {
@@ -133,7 +133,7 @@ std::string describe_event(const base::Event& e, int& level, nlohmann::json& f) 
       f["suppressed_before"] = e.suppressed;
       level = spdlog::level::warn;
       return fmt::format("mailbox error reply 0x{:04X} ({}){}", e.code,
-                         coe::describe(static_cast<coe::MailboxError>(e.code)),
+                         mailbox::describe(static_cast<mailbox::Error>(e.code)),
                          e.suppressed ? fmt::format(" ({} more not logged)", e.suppressed) : "");
     case EventKind::SdoAbort:
       f["event"] = "sdo_abort";

@@ -13,7 +13,7 @@
 
 namespace rackcat::coe {
 namespace {
-constexpr size_t kBodyOffset = MailboxHeader::kSize + CoeHeader::kSize;
+constexpr size_t kBodyOffset = CoeHeader::kSize;
 constexpr uint8_t kResponse = static_cast<uint8_t>(CoeService::SdoResponse);
 }  // namespace
 

@@ -12,7 +12,7 @@
 
 namespace rackcat::coe {
 namespace {
-constexpr size_t kBodyOffset = MailboxHeader::kSize + CoeHeader::kSize;
+constexpr size_t kBodyOffset = CoeHeader::kSize;
 constexpr uint8_t kService = static_cast<uint8_t>(CoeService::SdoInformation);
 
 uint16_t object_data_type(const Object& obj) {
@@ -137,7 +137,7 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
   // Requests are never fragmented (§5.6.3.2): an incomplete flag or fragments left is a
   // malformed SDO Information header.
   if ((body[0] & sdo_info::kIncomplete) || le::get16(&body[2]) != 0) {
-    return mailbox_error(reply, MailboxError::InvalidHeader, 0);
+    return mailbox_error(mailbox::Error::InvalidHeader);
   }
   const auto data = body.subspan(sdo_info::kHeaderSize);
   // Fragment payloads stay even so list entries never straddle two mailboxes (masters such as
@@ -147,7 +147,7 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
   switch (opcode) {
     case sdo_info::kGetOdListRequest: {
       if (data.size() < 2) {
-        return mailbox_error(reply, MailboxError::SizeTooShort, 0);
+        return mailbox_error(mailbox::Error::SizeTooShort);
       }
       const uint16_t list_type = le::get16(data.data());
       if (list_type > sdo_info::kListSettings) {
@@ -168,7 +168,7 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
     }
     case sdo_info::kGetObjectDescriptionRequest: {
       if (data.size() < 2) {
-        return mailbox_error(reply, MailboxError::SizeTooShort, 0);
+        return mailbox_error(mailbox::Error::SizeTooShort);
       }
       const Object* obj = od_.find(le::get16(data.data()));
       if (!obj) {
@@ -179,7 +179,7 @@ size_t SdoServer::sdo_info(std::span<const uint8_t> body, std::span<uint8_t> rep
     }
     case sdo_info::kGetEntryDescriptionRequest: {
       if (data.size() < 4) {
-        return mailbox_error(reply, MailboxError::SizeTooShort, 0);
+        return mailbox_error(mailbox::Error::SizeTooShort);
       }
       const Object* obj = od_.find(le::get16(data.data()));
       if (!obj) {

@@ -1,5 +1,5 @@
-// Mailbox framing, request dispatch, mailbox counter / double writes and the unsolicited
-// message queue of the SDO server (ETG.1000.4 §5.6, ETG.1000.6 §5.2 and §5.6.1).
+// CoE framing (the CoE header), request dispatch and the unsolicited message queue of the SDO
+// server (ETG.1000.6 §5.6.1); the mailbox header around it is the MailboxServer's.
 #include "coe/sdo_server.hpp"
 
 #include <algorithm>
@@ -11,9 +11,9 @@
 
 namespace rackcat::coe {
 namespace {
-// Mailbox header + CoE header + the 8-byte SDO body of an abort: the smallest reply the server
-// must always be able to send.
-constexpr size_t kMinReply = MailboxHeader::kSize + CoeHeader::kSize + 8;
+// CoE header + the 8-byte SDO body of an abort: the smallest reply the server must always be
+// able to send.
+constexpr size_t kMinReply = CoeHeader::kSize + 8;
 constexpr size_t kMinTransferBuffer = 256;
 }  // namespace
 
@@ -33,8 +33,6 @@ void SdoServer::prepare() {
 void SdoServer::reset() {
   transfer_ = {};
   info_ = {};
-  last_request_counter_ = 0;
-  last_request_len_ = 0;
 }
 
 bool SdoServer::queue_emergency(uint16_t error_code, uint8_t error_register,
@@ -42,28 +40,14 @@ bool SdoServer::queue_emergency(uint16_t error_code, uint8_t error_register,
   return emergencies_.push(Emergency{error_code, error_register, data});
 }
 
-size_t SdoServer::finish(std::span<uint8_t> reply, size_t data_length, MailboxType type) {
-  counter_ = next_mailbox_counter(counter_);
-  MailboxHeader h;
-  h.length = static_cast<uint16_t>(data_length);
-  h.type = static_cast<uint8_t>(type);
-  h.counter = counter_;
-  h.encode(reply);
-  return MailboxHeader::kSize + data_length;
-}
-
 size_t SdoServer::finish_coe(std::span<uint8_t> reply, size_t body_length, uint8_t service) {
-  CoeHeader{0, service}.encode(reply.subspan(MailboxHeader::kSize));
-  return finish(reply, CoeHeader::kSize + body_length, MailboxType::CoE);
+  CoeHeader{0, service}.encode(reply);
+  return CoeHeader::kSize + body_length;
 }
 
-size_t SdoServer::mailbox_error(std::span<uint8_t> reply, MailboxError error, uint16_t address) {
-  const uint8_t next = next_mailbox_counter(counter_);
-  const size_t n = write_mailbox_error(reply, error, address, next);
-  if (n) {
-    counter_ = next;
-  }
-  return n;
+size_t SdoServer::mailbox_error(mailbox::Error error) {
+  error_ = error;
+  return 0;
 }
 
 size_t SdoServer::abort(std::span<uint8_t> reply, uint16_t index, uint8_t subindex,
@@ -71,7 +55,7 @@ size_t SdoServer::abort(std::span<uint8_t> reply, uint16_t index, uint8_t subind
   // ETG.1000.6 §5.6.2.7.1: an abort travels as an SDO *request* (service 2), command byte
   // exactly 0x80, index, subindex, 32-bit abort code: 10 bytes with the CoE header.
   transfer_ = {};
-  uint8_t* b = reply.data() + MailboxHeader::kSize + CoeHeader::kSize;
+  uint8_t* b = reply.data() + CoeHeader::kSize;
   b[0] = sdo::kAbortCommand;
   le::put16(b + 1, index);
   b[3] = subindex;
@@ -79,69 +63,31 @@ size_t SdoServer::abort(std::span<uint8_t> reply, uint16_t index, uint8_t subind
   return finish_coe(reply, 8, static_cast<uint8_t>(CoeService::SdoRequest));
 }
 
-size_t SdoServer::handle(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                         EsmState state) {
-  if (reply.size() < kMinReply) {
-    return mailbox_error(reply, MailboxError::NoMoreMemory, 0);
-  }
-  const auto hdr = MailboxHeader::decode(request);
-  if (!hdr) {
-    return mailbox_error(reply, MailboxError::Syntax, 0);
-  }
-  if (hdr->length > request.size() - MailboxHeader::kSize) {
-    return mailbox_error(reply, MailboxError::InvalidSize, hdr->address);
-  }
-  const auto msg = request.first(MailboxHeader::kSize + hdr->length);
-
-  // A double write (ETG.1000.4 §5.6, mailbox header Cnt: "detection of double write"): the
-  // master resent a mailbox write whose working counter it missed (SOEM does after 2 ms). The
-  // reply to the first write is already on its way, so the repeat is dropped: a second copy
-  // would be taken for the answer to the master's next request. A master that lost a reply
-  // asks for it with the SM1 repeat request instead, which the ESC serves.
-  if (hdr->counter != 0 && hdr->counter == last_request_counter_ &&
-      msg.size() == last_request_len_ &&
-      std::memcmp(msg.data(), last_request_.data(), msg.size()) == 0) {
-    return 0;
-  }
-
+mailbox::Answer SdoServer::handle(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                                  EsmState state) {
+  if (reply.size() < kMinReply) return {0, mailbox::Error::NoMoreMemory};
   // A new request ends any SDO Information fragments still queued for an earlier one.
   info_ = {};
-  const size_t n = dispatch(msg, reply, state);
-
-  last_request_counter_ = hdr->counter;
-  last_request_len_ = msg.size() <= last_request_.size() ? msg.size() : 0;
-  std::memcpy(last_request_.data(), msg.data(), last_request_len_);
-  return n;
+  error_ = mailbox::Error::None;
+  const size_t n = dispatch(request, reply, state);
+  return {error_ == mailbox::Error::None ? n : 0, error_};
 }
 
-size_t SdoServer::dispatch(std::span<const uint8_t> msg, std::span<uint8_t> reply, EsmState state) {
-  const auto hdr = *MailboxHeader::decode(msg);
-  if (hdr.channel != 0) {
-    return mailbox_error(reply, MailboxError::InvalidChannel, hdr.address);
-  }
-  if (hdr.mailbox_type() != MailboxType::CoE) {
-    return mailbox_error(reply, MailboxError::UnsupportedProtocol, hdr.address);
-  }
-  const auto data = msg.subspan(MailboxHeader::kSize);
+size_t SdoServer::dispatch(std::span<const uint8_t> data, std::span<uint8_t> reply,
+                           EsmState state) {
   const auto coe = CoeHeader::decode(data);
-  if (!coe) {
-    return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
-  }
+  if (!coe) return mailbox_error(mailbox::Error::SizeTooShort);
   const auto body = data.subspan(CoeHeader::kSize);
   switch (static_cast<CoeService>(coe->service)) {
     case CoeService::SdoRequest:
       // Every SDO request is at least 8 bytes after the CoE header (mailbox length >= 10).
-      if (body.size() < sdo::kInitiateBody) {
-        return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
-      }
+      if (body.size() < sdo::kInitiateBody) return mailbox_error(mailbox::Error::SizeTooShort);
       return sdo_request(body, reply, state);
     case CoeService::SdoInformation:
-      if (body.size() < 4) {
-        return mailbox_error(reply, MailboxError::SizeTooShort, hdr.address);
-      }
+      if (body.size() < 4) return mailbox_error(mailbox::Error::SizeTooShort);
       return sdo_info(body, reply);
     default:
-      return mailbox_error(reply, MailboxError::ServiceNotSupported, hdr.address);
+      return mailbox_error(mailbox::Error::ServiceNotSupported);
   }
 }
 
@@ -184,7 +130,7 @@ size_t SdoServer::poll(std::span<uint8_t> reply) {
   Emergency e;
   if (emergencies_.pop(e)) {
     // ETG.1000.6 §5.6.4: error code, error register, 5 data bytes after the CoE header.
-    uint8_t* b = reply.data() + MailboxHeader::kSize + CoeHeader::kSize;
+    uint8_t* b = reply.data() + CoeHeader::kSize;
     le::put16(b, e.error_code);
     b[2] = e.error_register;
     std::copy(e.data.begin(), e.data.end(), b + 3);

@@ -1,14 +1,14 @@
-// The CoE SDO server of one slave (ETG.1000.6 §5.6): takes a whole mailbox request (mailbox
-// header included) and writes the whole reply mailbox. It knows nothing of the ESC: the
-// device registers it as the firmware's CoE mailbox protocol (handle() for requests, poll()
-// for unsolicited messages).
+// The CoE SDO server of one slave (ETG.1000.6 §5.6): takes the data of one CoE mailbox
+// request (CoE header first; the mailbox header is the firmware's MailboxServer's) and writes
+// the data of the reply. It knows nothing of the ESC: the device registers it as the
+// firmware's CoE mailbox protocol (handle() for requests, poll() for unsolicited messages).
 //
 // Services: SDO upload/download (expedited, normal, segmented, complete access both ways),
 // SDO Information (OD list of all six list types, object and entry descriptions, fragmented),
-// Emergency (queued, sent by poll()), SDO aborts (CoE service 2, command 0x80, 10 bytes) and
-// mailbox errors (mailbox type 0). Mailbox counter: every message the server sends carries its
-// own counter 1..7; a request repeating the master's previous non-zero counter (and bytes) is
-// a double write (ETG.1000.4 §5.6) and is dropped: no reply, not executed twice.
+// Emergency (queued, sent by poll()), SDO aborts (CoE service 2, command 0x80, 10 bytes).
+// A CoE header or service it cannot serve is answered with a mailbox error code (ETG.1000.6
+// §5.2.3: 0x0004 service, 0x0005 header, 0x0006 too short, 0x0007 no room) that the
+// MailboxServer sends; the counter, double writes and the repeat request are the server's.
 //
 // One server per slave; its transfer state is per server, so several slaves run side by side.
 // Construction sizes every buffer; handle() and poll() allocate nothing.
@@ -21,30 +21,29 @@
 #include <vector>
 
 #include "coe/abort_code.hpp"
+#include "base/mailbox_error.hpp"
 #include "coe/access.hpp"
 #include "coe/emergency_queue.hpp"
-#include "coe/mailbox_error.hpp"
-#include "coe/mailbox_header.hpp"
 #include "coe/object_dictionary.hpp"
 
 namespace rackcat::coe {
 
 class SdoServer {
  public:
-  // Largest mailbox kept to recognise double writes (an SM of up to 1486 bytes fits a frame).
-  static constexpr size_t kMaxMailbox = 1486;
   static constexpr size_t kEmergencySlots = 16;
 
   // `od` must outlive the server. Sizes the transfer buffers from the dictionary's largest
   // object; call prepare() again if objects are added later.
   explicit SdoServer(ObjectDictionary& od);
 
-  // One mailbox request -> one reply (header included). `reply` is the send mailbox (SM1);
-  // its size bounds every reply and sets the segment / fragment size. Returns the reply length,
-  // or 0 when no reply is due (an abort request from the master, a too-small reply buffer).
-  size_t handle(std::span<const uint8_t> request, std::span<uint8_t> reply, EsmState state);
-  // The next unsolicited message (Emergency first, then further SDO Information fragments),
-  // or 0. Call when SM1 is free.
+  // One CoE request (the mailbox data: CoE header and body) -> the reply's data. `reply` is
+  // SM1 after the mailbox header; its size bounds every reply and sets the segment / fragment
+  // size. Returns the reply's length (0 when no reply is due: an abort request from the
+  // master) or the mailbox error to answer with.
+  mailbox::Answer handle(std::span<const uint8_t> request, std::span<uint8_t> reply,
+                         EsmState state);
+  // The data of the next unsolicited message (Emergency first, then further SDO Information
+  // fragments), or 0. Call when SM1 is free.
   size_t poll(std::span<uint8_t> reply);
   bool has_pending() const { return !emergencies_.empty() || info_.kind != InfoKind::None; }
 
@@ -57,21 +56,14 @@ class SdoServer {
   size_t pending_emergencies() const { return emergencies_.size(); }
   size_t emergency_overruns() const { return emergencies_.overruns(); }
 
-  // Drops transfer, fragment and double-write state (e.g. the ESM went back to INIT: the mailbox
-  // restarts and so does the master's counter). Queued emergencies stay. handle(), poll() and
+  // Drops transfer and fragment state (e.g. the ESM went back to INIT: the mailbox restarts).
+  // Queued emergencies stay. handle(), poll() and
   // reset() belong to one thread (the mailbox side).
   void reset();
   // Re-sizes the transfer buffers after objects were added (start-up only: allocates).
   void prepare();
 
   const ObjectDictionary& dictionary() const { return od_; }
-
-  // The counter for a message another mailbox protocol of this slave sends (FoE): one
-  // sequence 1..7 for every message the slave sends (ETG.1000.4 §5.6).
-  uint8_t next_counter() {
-    counter_ = next_mailbox_counter(counter_);
-    return counter_;
-  }
 
  private:
   enum class TransferKind : uint8_t { None, Upload, Download };
@@ -97,9 +89,9 @@ class SdoServer {
   };
 
   // Framing (sdo_server.cpp).
-  size_t finish(std::span<uint8_t> reply, size_t data_length, MailboxType type);
   size_t finish_coe(std::span<uint8_t> reply, size_t body_length, uint8_t service);
-  size_t mailbox_error(std::span<uint8_t> reply, MailboxError error, uint16_t address);
+  // Records the mailbox error handle() answers with; returns 0 (no CoE reply).
+  size_t mailbox_error(mailbox::Error error);
   size_t abort(std::span<uint8_t> reply, uint16_t index, uint8_t subindex, AbortCode code);
   size_t dispatch(std::span<const uint8_t> request, std::span<uint8_t> reply, EsmState state);
   size_t sdo_request(std::span<const uint8_t> body, std::span<uint8_t> reply, EsmState state);
@@ -152,11 +144,7 @@ class SdoServer {
   std::vector<uint8_t> value_;     // one entry's value during a complete-access write check
   std::vector<uint8_t> info_buf_;  // object / entry description being fragmented
   EmergencyQueue<kEmergencySlots> emergencies_;
-
-  uint8_t counter_ = 0;  // our last counter (1..7)
-  uint8_t last_request_counter_ = 0;
-  size_t last_request_len_ = 0;
-  std::array<uint8_t, kMaxMailbox> last_request_{};
+  mailbox::Error error_ = mailbox::Error::None;  // the current request's mailbox error
 };
 
 }  // namespace rackcat::coe

@@ -97,12 +97,13 @@ void GenericDevice::on_state_changed(EsmState, EsmState to) {
 }
 
 void GenericDevice::add_mailbox_protocols(ecat::MailboxServer& server) {
-  server.add(ecat::mailbox_type::kCoE, coe_mailbox_);
+  server.add(mailbox::Type::CoE, coe_mailbox_);
 }
 
-size_t GenericDevice::CoeMailbox::on_request(std::span<const uint8_t> request,
-                                             std::span<uint8_t> reply, EsmState state) {
-  return device.sdo_ ? device.sdo_->handle(request, reply, state) : 0;
+mailbox::Answer GenericDevice::CoeMailbox::on_request(const ecat::MailboxRequest& request,
+                                                      std::span<uint8_t> reply) {
+  if (!device.sdo_) return {};
+  return device.sdo_->handle(request.data, reply, request.state);
 }
 
 size_t GenericDevice::CoeMailbox::poll(std::span<uint8_t> reply) {

@@ -62,8 +62,8 @@ class GenericDevice final : public ecat::Application {
   // The SDO server as the firmware's CoE mailbox protocol (ETG.1000.6 §5.6).
   struct CoeMailbox final : ecat::MailboxProtocol {
     explicit CoeMailbox(GenericDevice& d) : device(d) {}
-    size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                      EsmState state) override;
+    mailbox::Answer on_request(const ecat::MailboxRequest& request,
+                               std::span<uint8_t> reply) override;
     size_t poll(std::span<uint8_t> reply) override;
     GenericDevice& device;
   };

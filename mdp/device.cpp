@@ -11,8 +11,6 @@
 #include <ctime>
 
 #include "coe/bits.hpp"
-#include "coe/mailbox_error.hpp"
-#include "coe/mailbox_header.hpp"
 #include "coe/process_image.hpp"
 #include "coe/sdo_server.hpp"
 #include "foe/foe_server.hpp"
@@ -81,7 +79,6 @@ struct Device::Impl {
   std::vector<uint8_t> running_firmware;  // the container the device "runs" since power-on
   FirmwareInfo built_in_firmware;         // the rack file's versions: what runs without a container
   std::string firmware_report;
-  std::vector<uint8_t> last_foe_request;  // double-write detection of FoE requests
   std::vector<uint8_t> default_payload;   // the parameter set as shipped (factory defaults)
   std::string state_dir;
   std::string load_report;
@@ -416,37 +413,6 @@ struct Device::Impl {
     limits.max_file_size = kMaxFirmwareFile;
     foe = std::make_unique<foe::FoeServer>(*files, limits);
   }
-
-  // One FoE mailbox request (mailbox type 4): the mailbox header here, the protocol in foe.
-  size_t foe_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
-    const auto hdr = *coe::MailboxHeader::decode(request);
-    auto mailbox_error = [&](coe::MailboxError e) {
-      return coe::write_mailbox_error(reply, e, hdr.address, sdo->next_counter());
-    };
-    if (hdr.length > request.size() - coe::MailboxHeader::kSize) {
-      return mailbox_error(coe::MailboxError::InvalidSize);
-    }
-    const auto msg = request.first(coe::MailboxHeader::kSize + hdr.length);
-    // A double write (ETG.1000.4 §5.6): the same counter and bytes again are dropped.
-    if (hdr.counter != 0 && msg.size() == last_foe_request.size() &&
-        std::equal(msg.begin(), msg.end(), last_foe_request.begin())) {
-      return 0;
-    }
-    last_foe_request.assign(msg.begin(), msg.end());
-    if (hdr.channel != 0) return mailbox_error(coe::MailboxError::InvalidChannel);
-    if (reply.size() < coe::MailboxHeader::kSize + foe::FoeHeader::kSize) return 0;
-    const auto r = foe->handle(msg.subspan(coe::MailboxHeader::kSize),
-                               request.size() - coe::MailboxHeader::kSize,
-                               reply.subspan(coe::MailboxHeader::kSize));
-    if (r.too_short) return mailbox_error(coe::MailboxError::SizeTooShort);
-    if (r.length == 0) return 0;
-    coe::MailboxHeader out;
-    out.length = static_cast<uint16_t>(r.length);
-    out.type = static_cast<uint8_t>(coe::MailboxType::FoE);
-    out.counter = sdo->next_counter();
-    out.encode(reply);
-    return coe::MailboxHeader::kSize + r.length;
-  }
 };
 
 void Device::Impl::install_hooks() {
@@ -612,26 +578,29 @@ std::span<const Module> Device::modules() const {
   return impl_->config.modules;
 }
 
-size_t Device::handle_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply) {
-  Impl& d = *impl_;
-  const auto hdr = coe::MailboxHeader::decode(request);
-  if (hdr && hdr->mailbox_type() == coe::MailboxType::FoE) return d.foe_mailbox(request, reply);
-  // BOOT serves FoE only (ETG.1000.6 §5.3 "Bootstrap"): any other protocol is not supported.
-  if (hdr && d.state == EsmState::Boot) {
-    return coe::write_mailbox_error(reply, coe::MailboxError::UnsupportedProtocol, hdr->address,
-                                    d.sdo->next_counter());
-  }
-  return d.sdo->handle(request, reply, d.state);
+mailbox::Answer Device::coe_request(std::span<const uint8_t> request, std::span<uint8_t> reply) {
+  return impl_->sdo->handle(request, reply, impl_->state);
 }
 
 bool Device::mailbox_pending() const {
   return impl_->writer->has_results() || !impl_->foe->idle() || impl_->sdo->has_pending();
 }
 
-size_t Device::poll_mailbox(std::span<uint8_t> reply) {
+size_t Device::coe_poll(std::span<uint8_t> reply) {
   impl_->complete_jobs();
-  impl_->foe->tick();
   return impl_->sdo->poll(reply);
+}
+
+mailbox::Answer Device::foe_request(std::span<const uint8_t> request, size_t capacity,
+                                    std::span<uint8_t> reply) {
+  if (reply.size() < foe::FoeHeader::kSize) return {0, mailbox::Error::NoMoreMemory};
+  const auto r = impl_->foe->handle(request, capacity, reply);
+  if (r.too_short) return {0, mailbox::Error::SizeTooShort};
+  return {r.length, mailbox::Error::None};
+}
+
+void Device::foe_poll() {
+  impl_->foe->tick();
 }
 
 bool Device::raise_emergency(uint16_t error_code, uint8_t error_register,
@@ -714,7 +683,6 @@ void Device::state_changed(EsmState from, EsmState to) {
   if (to == EsmState::Init) {
     d.sdo->reset();
     d.foe->reset();
-    d.last_foe_request.clear();
   }
   if (to == EsmState::SafeOp && from == EsmState::PreOp) d.image->compile();
   d.notify([&](CycleListener& l) { l.on_state_changed(*this, from, to); });

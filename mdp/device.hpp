@@ -15,6 +15,7 @@
 #include <span>
 #include <string>
 
+#include "base/mailbox_error.hpp"
 #include "coe/access.hpp"
 #include "coe/diagnosis_history.hpp"
 #include "coe/object_dictionary.hpp"
@@ -91,16 +92,27 @@ class Device {
   // object indices of each module (ETG.5001 index distance 0x10).
   std::span<const Module> modules() const;
 
-  // --- Mailbox (ETG.1000.4 §5.5, ETG.1000.6 §5.6): a complete mailbox request including the
-  // 6-byte mailbox header; writes at most reply.size() bytes and returns the reply length or 0.
-  size_t handle_mailbox(std::span<const uint8_t> request, std::span<uint8_t> reply);
-  // Unsolicited messages (CoE Emergency) when SM1 is free; 0 when nothing is pending. Also
-  // where command objects whose file work has finished on the worker (0xFBF0, 0xFBF2..0xFBF4)
-  // complete, so call it regularly (the ESC does, whenever the mailbox is idle).
-  size_t poll_mailbox(std::span<uint8_t> reply);
-  // Whether poll_mailbox() has work: an Emergency or SDO Information fragment queued, a
-  // command's file work finished on the worker, a FoE transfer open (its timeout). The
-  // firmware runs without an ESC event only then (ecat::Application::mailbox_pending).
+  // --- Mailbox protocols. The firmware's MailboxServer (ecat/slave) owns the mailbox frame
+  // (ETG.1000.4 §5.6: header, counter, double writes, error replies); these take one request's
+  // mailbox data and write the reply's data (SM1 after the header), answering its length
+  // (0 = no reply) or a mailbox error for the server to send.
+  // CoE (ETG.1000.6 §5.6) in the device's current state.
+  mailbox::Answer coe_request(std::span<const uint8_t> request, std::span<uint8_t> reply);
+  // Unsolicited CoE messages (Emergency, SDO Information fragments) when SM1 is free; 0 when
+  // nothing is pending. Also where command objects whose file work has finished on the worker
+  // (0xFBF0, 0xFBF2..0xFBF4) complete, so call it regularly (the firmware does, whenever the
+  // mailbox is idle).
+  size_t coe_poll(std::span<uint8_t> reply);
+  // FoE (ETG.1000.5 §5.3), in BOOT too. `capacity`: the data bytes SM0 holds, which sets the
+  // last-packet rule of writes.
+  mailbox::Answer foe_request(std::span<const uint8_t> request, size_t capacity,
+                              std::span<uint8_t> reply);
+  // Drops an FoE transfer idle past its timeout and drives a finished commit to its end;
+  // call whenever the mailbox is idle.
+  void foe_poll();
+  // Whether coe_poll() or foe_poll() has work: an Emergency or SDO Information fragment
+  // queued, a command's file work finished on the worker, a FoE transfer open (its timeout).
+  // The firmware runs without an ESC event only then (ecat::Application::mailbox_pending).
   bool mailbox_pending() const;
   // Queue a CoE Emergency (ETG.1000.6 §5.6.4): error code (CiA-style, e.g. 0x4210), error
   // register (0x1001 style bits) and 5 manufacturer bytes ([0] RIM, [1] module, [2] event bit,

@@ -65,23 +65,26 @@ ecat::ProcessDataSizes RackSlave::process_data_sizes() const {
 }
 
 void RackSlave::add_mailbox_protocols(ecat::MailboxServer& server) {
-  server.add(ecat::mailbox_type::kCoE, coe_mailbox_);
-  server.add(ecat::mailbox_type::kFoE, foe_mailbox_,
+  server.add(mailbox::Type::CoE, coe_mailbox_);
+  server.add(mailbox::Type::FoE, foe_mailbox_,
              ecat::MailboxServer::kMailboxStates | ecat::MailboxServer::kBoot);
 }
 
-size_t RackSlave::FoeMailbox::on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                                         EsmState) {
-  const size_t n = slave.device_->handle_mailbox(request, reply);
-  log_mailbox_reply(reply.first(n));
-  return n;
+mailbox::Answer RackSlave::FoeMailbox::on_request(const ecat::MailboxRequest& request,
+                                                  std::span<uint8_t> reply) {
+  return slave.device_->foe_request(request.data, request.capacity, reply);
 }
 
-size_t RackSlave::CoeMailbox::on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                                         EsmState) {
-  const size_t n = slave.device_->handle_mailbox(request, reply);
-  log_mailbox_reply(reply.first(n));
-  return n;
+size_t RackSlave::FoeMailbox::poll(std::span<uint8_t>) {
+  slave.device_->foe_poll();
+  return 0;
+}
+
+mailbox::Answer RackSlave::CoeMailbox::on_request(const ecat::MailboxRequest& request,
+                                                  std::span<uint8_t> reply) {
+  const mailbox::Answer answer = slave.device_->coe_request(request.data, reply);
+  log_coe_reply(reply.first(answer.length));
+  return answer;
 }
 
 bool RackSlave::mailbox_pending() const {
@@ -97,8 +100,8 @@ size_t RackSlave::CoeMailbox::poll(std::span<uint8_t> reply) {
     if (self.restart_) self.restart_();
     return 0;
   }
-  const size_t n = self.device_->poll_mailbox(reply);
-  log_mailbox_reply(reply.first(n));
+  const size_t n = self.device_->coe_poll(reply);
+  log_coe_reply(reply.first(n));
   return n;
 }
 

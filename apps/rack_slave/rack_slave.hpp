@@ -65,8 +65,8 @@ class RackSlave final : public ecat::Application {
   // The device's CoE server as the firmware's CoE mailbox protocol (ETG.1000.6 §5.6).
   struct CoeMailbox final : ecat::MailboxProtocol {
     explicit CoeMailbox(RackSlave& s) : slave(s) {}
-    size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                      EsmState state) override;
+    mailbox::Answer on_request(const ecat::MailboxRequest& request,
+                               std::span<uint8_t> reply) override;
     size_t poll(std::span<uint8_t> reply) override;
     RackSlave& slave;
   };
@@ -74,8 +74,9 @@ class RackSlave final : public ecat::Application {
   // The device's FoE server (ETG.1000.5 §5.3) as the firmware's FoE protocol, in BOOT too.
   struct FoeMailbox final : ecat::MailboxProtocol {
     explicit FoeMailbox(RackSlave& s) : slave(s) {}
-    size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                      EsmState state) override;
+    mailbox::Answer on_request(const ecat::MailboxRequest& request,
+                               std::span<uint8_t> reply) override;
+    size_t poll(std::span<uint8_t> reply) override;
     RackSlave& slave;
   };
   FoeMailbox foe_mailbox_{*this};

@@ -12,21 +12,12 @@ namespace rackcat::ecat {
 
 namespace {
 
-// Mailbox error codes (ETG.1000.6 §5.2.3 Table 29, "Detail") the server itself produces.
-constexpr uint16_t kErrorInvalidChannel = 0x0003;
-constexpr uint16_t kErrorUnsupportedProtocol = 0x0002;
-constexpr uint16_t kErrorInvalidSize = 0x0008;
-constexpr uint16_t kErrorService = 0x0001;  // mailbox command "error"
-
 constexpr uint16_t kSm1 = reg::sm::base(1);
-
-constexpr uint8_t next_counter(uint8_t c) {
-  return static_cast<uint8_t>(c >= 7 ? 1 : c + 1);
-}
 
 }  // namespace
 
-bool MailboxServer::add(uint8_t type, MailboxProtocol& protocol, uint8_t states) {
+bool MailboxServer::add(mailbox::Type mailbox_type, MailboxProtocol& protocol, uint8_t states) {
+  const auto type = static_cast<uint8_t>(mailbox_type);
   for (size_t i = 0; i < protocol_count_; ++i) {
     if (protocols_[i].type == type) {
       protocols_[i] = {type, states, &protocol};
@@ -54,10 +45,10 @@ uint8_t MailboxServer::state_bit(EsmState s) {
   return 0;
 }
 
-MailboxProtocol* MailboxServer::find(uint8_t type, EsmState state) const {
+const MailboxServer::Entry* MailboxServer::find(uint8_t type, EsmState state) const {
   for (size_t i = 0; i < protocol_count_; ++i) {
     const Entry& e = protocols_[i];
-    if (e.type == type && (e.states & state_bit(state)) != 0) return e.protocol;
+    if (e.type == type && (e.states & state_bit(state)) != 0) return &e;
   }
   return nullptr;
 }
@@ -92,7 +83,7 @@ bool MailboxServer::sm1_free() {
 void MailboxServer::send(size_t length) {
   // Our own counter in every message we send (ETG.1000.4 §5.6 "Cnt"), then the whole SM1
   // buffer: writing its last byte hands it to the master.
-  counter_ = next_counter(counter_);
+  counter_ = mailbox::next_counter(counter_);
   reply_[5] = static_cast<uint8_t>((reply_[5] & 0x8F) | (counter_ << 4));
   pdi_.write(out_start_, std::span<const uint8_t>(reply_.data(), out_length_));
   std::memcpy(last_.data(), reply_.data(), out_length_);
@@ -115,43 +106,60 @@ void MailboxServer::serve_repeat() {
               static_cast<uint8_t>((pdi_control & ~reg::sm::kPdiDeactivate) ^ reg::sm::kRepeatAck));
 }
 
-size_t MailboxServer::mailbox_error(uint16_t detail, uint16_t address) {
-  // ETG.1000.6 §5.2.3: header with Type 0, then service 0x0001 and the detail code.
-  if (observer_ != nullptr) observer_->on_mailbox_error(detail);
-  if (out_length_ < kHeaderSize + 4) return 0;
-  le::put16(&reply_[0], 4);
-  le::put16(&reply_[2], address);
-  reply_[4] = 0;
-  reply_[5] = 0;  // type 0 (error); counter set by send()
-  le::put16(&reply_[6], kErrorService);
-  le::put16(&reply_[8], detail);
-  return kHeaderSize + 4;
+size_t MailboxServer::mailbox_error(mailbox::Error error, uint16_t address) {
+  // ETG.1000.6 §5.2.3: header with Type 0, then service 0x0001 and the detail code; the
+  // counter is set by send().
+  if (observer_ != nullptr) observer_->on_mailbox_error(static_cast<uint16_t>(error));
+  return mailbox::write_error(std::span<uint8_t>(reply_.data(), out_length_), error, address, 0);
+}
+
+size_t MailboxServer::frame(const Entry& entry, size_t data_length) {
+  // The reply's header (ETG.1000.4 §5.6 Table 29): Length, Address 0, channel 0, priority 0,
+  // the protocol's Type; the counter is set by send().
+  if (data_length == 0) return 0;
+  mailbox::Header h;
+  h.length = static_cast<uint16_t>(std::min<size_t>(data_length, out_length_ - kHeaderSize));
+  h.type = entry.type;
+  h.encode(std::span<uint8_t>(reply_.data(), out_length_));
+  return kHeaderSize + h.length;
 }
 
 size_t MailboxServer::dispatch(std::span<const uint8_t> request, EsmState state) {
-  const uint16_t length = le::get16(&request[0]);
-  const uint16_t address = le::get16(&request[2]);
-  if (length > request.size() - kHeaderSize) return mailbox_error(kErrorInvalidSize, address);
-  const auto msg = request.first(kHeaderSize + length);
+  const auto header = mailbox::Header::decode(request);
+  if (!header) return mailbox_error(mailbox::Error::Syntax, 0);
+  if (header->length > request.size() - kHeaderSize) {
+    return mailbox_error(mailbox::Error::InvalidSize, header->address);
+  }
+  const auto msg = request.first(kHeaderSize + header->length);
 
-  // A double write: the same non-zero counter and the same bytes as the previous request.
-  // The reply to the first copy is already on its way; a second one would be taken for the
-  // answer to the master's next request. A master that lost a reply uses the repeat request.
-  const uint8_t counter = (msg[5] >> 4) & 0x07;
-  if (counter != 0 && counter == last_request_counter_ && msg.size() == last_request_len_ &&
+  // A double write (ETG.1000.4 §5.6, header "Cnt": detection of a double write): the same
+  // non-zero counter and the same bytes as the previous request. The master resent a write
+  // whose working counter it missed (SOEM does after 2 ms); the reply to the first copy is
+  // already on its way and a second one would be taken for the answer to the master's next
+  // request. A master that lost a reply uses the repeat request instead.
+  if (header->counter != 0 && header->counter == last_request_counter_ &&
+      msg.size() == last_request_len_ &&
       std::memcmp(msg.data(), last_request_.data(), msg.size()) == 0) {
     return 0;
   }
-  last_request_counter_ = counter;
+  last_request_counter_ = header->counter;
   last_request_len_ = msg.size();
   std::memcpy(last_request_.data(), msg.data(), msg.size());
 
-  if ((msg[4] & 0x3F) != 0) return mailbox_error(kErrorInvalidChannel, address);
-  MailboxProtocol* protocol = find(msg[5] & 0x0F, state);
-  if (protocol == nullptr) return mailbox_error(kErrorUnsupportedProtocol, address);
-  // The protocol gets the whole SM0 buffer, as the master wrote it: its size is the capacity
-  // a protocol's segmented transfers are sized by.
-  return protocol->on_request(request, std::span<uint8_t>(reply_.data(), out_length_), state);
+  if (header->channel != 0) return mailbox_error(mailbox::Error::InvalidChannel, header->address);
+  const Entry* entry = find(header->type, state);
+  if (entry == nullptr) return mailbox_error(mailbox::Error::UnsupportedProtocol, header->address);
+  if (out_length_ <= kHeaderSize) return 0;
+  MailboxRequest r;
+  r.data = msg.subspan(kHeaderSize);
+  r.capacity = request.size() - kHeaderSize;
+  r.address = header->address;
+  r.priority = header->priority;
+  r.state = state;
+  const mailbox::Answer answer = entry->protocol->on_request(
+      r, std::span<uint8_t>(reply_.data() + kHeaderSize, out_length_ - kHeaderSize));
+  if (answer.error != mailbox::Error::None) return mailbox_error(answer.error, header->address);
+  return frame(*entry, answer.length);
 }
 
 void MailboxServer::service(EsmState state, bool sm0_written, bool activation_changed) {
@@ -177,7 +185,9 @@ void MailboxServer::service(EsmState state, bool sm0_written, bool activation_ch
   for (size_t i = 0; n == 0 && i < protocol_count_; ++i) {
     const Entry& e = protocols_[(next_poll_ + i) % protocol_count_];
     if ((e.states & state_bit(state)) == 0) continue;
-    n = e.protocol->poll(std::span<uint8_t>(reply_.data(), out_length_));
+    if (out_length_ <= kHeaderSize) break;
+    n = frame(e, e.protocol->poll(
+                     std::span<uint8_t>(reply_.data() + kHeaderSize, out_length_ - kHeaderSize)));
     if (n != 0) next_poll_ = (next_poll_ + i + 1) % protocol_count_;
   }
   if (n != 0) send(std::min<size_t>(n, out_length_));

@@ -1,9 +1,12 @@
 // The slave's mailbox (ETG.1000.4 §5.6, §6.7.3; ETG.1000.6 §5.2): SM0 carries the master's
 // requests, SM1 the slave's replies and unsolicited messages. The server owns what every
 // protocol shares and none should repeat:
+//   - the frame: the mailbox header of every request is read here and of every message sent
+//     written here (base/mailbox_header.hpp); a protocol sees only the data after it;
 //   - the header check: a Length that does not fit SM0 is answered with mailbox error 0x0008
-//     (invalid size); a Type no registered protocol serves in the current state with 0x0002
-//     (unsupported protocol) (ETG.1000.6 §5.2.3 Table 29);
+//     (invalid size), a channel other than 0 with 0x0003, a Type no registered protocol
+//     serves in the current state with 0x0002 (unsupported protocol) (ETG.1000.6 §5.2.3
+//     Table 29); a protocol's own header errors (0x0004..0x0007) go out as error replies too;
 //   - double writes: a request repeating the previous request's non-zero counter and bytes is
 //     the master resending a write whose working counter it missed; it is dropped (no reply,
 //     not executed twice) (ETG.1000.4 §5.6, header "Cnt");
@@ -24,6 +27,8 @@
 #include <vector>
 
 #include "base/esm_state.hpp"
+#include "base/mailbox_error.hpp"
+#include "base/mailbox_header.hpp"
 #include "ecat/pdi_port.hpp"
 #include "ecat/slave/esm_observer.hpp"
 #include "ecat/slave/mailbox_protocol.hpp"
@@ -33,7 +38,7 @@ namespace rackcat::ecat {
 class MailboxServer {
  public:
   static constexpr size_t kMaxProtocols = 8;
-  static constexpr size_t kHeaderSize = 6;
+  static constexpr size_t kHeaderSize = mailbox::Header::kSize;
 
   // States a protocol serves (bit per state); CoE: PREOP, SAFEOP, OP (ETG.1000.6 §5.3); a
   // bootstrap protocol (FoE in BOOT) registers for kBoot.
@@ -47,7 +52,7 @@ class MailboxServer {
 
   // Registers `protocol` for mailbox `type` in `states`. A later registration for the same
   // type replaces the earlier one. Start-up only; false when the table is full.
-  bool add(uint8_t type, MailboxProtocol& protocol, uint8_t states = kMailboxStates);
+  bool add(mailbox::Type type, MailboxProtocol& protocol, uint8_t states = kMailboxStates);
 
   // The mailbox opens with SM0 at `in_start`/`in_length` and SM1 at `out_start`/`out_length`
   // (the ESM checked them against the SII). Sizes the buffers (transition only, not cyclic).
@@ -63,7 +68,8 @@ class MailboxServer {
   void service(EsmState state, bool sm0_written, bool activation_changed);
 
   uint8_t last_counter() const { return counter_; }
-  // Hears every mailbox error reply the server sends itself; nullptr removes it.
+  // Hears every mailbox error reply the server sends (its header checks and the protocols'
+  // errors alike); nullptr removes it.
   void set_observer(EsmObserver* observer) { observer_ = observer; }
 
  private:
@@ -73,9 +79,10 @@ class MailboxServer {
     MailboxProtocol* protocol = nullptr;
   };
   static uint8_t state_bit(EsmState s);
-  MailboxProtocol* find(uint8_t type, EsmState state) const;
+  const Entry* find(uint8_t type, EsmState state) const;
   size_t dispatch(std::span<const uint8_t> request, EsmState state);
-  size_t mailbox_error(uint16_t detail, uint16_t address);
+  size_t mailbox_error(mailbox::Error error, uint16_t address);
+  size_t frame(const Entry& entry, size_t data_length);
   bool sm1_free();
   void send(size_t length);
   void serve_repeat();

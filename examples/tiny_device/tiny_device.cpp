@@ -93,11 +93,11 @@ class TinyDevice final : public ecat::Application, public ecat::MailboxProtocol 
   void on_state_changed(EsmState, EsmState to) override { state_ = to; }
   ecat::ProcessDataSizes process_data_sizes() const override { return {.outputs = 0, .inputs = 2}; }
   void add_mailbox_protocols(ecat::MailboxServer& server) override {
-    server.add(ecat::mailbox_type::kCoE, *this);
+    server.add(mailbox::Type::CoE, *this);
   }
-  size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                    EsmState state) override {
-    return sdo_.handle(request, reply, state);
+  mailbox::Answer on_request(const ecat::MailboxRequest& request,
+                             std::span<uint8_t> reply) override {
+    return sdo_.handle(request.data, reply, request.state);
   }
   size_t poll(std::span<uint8_t> reply) override { return sdo_.poll(reply); }
   void update_inputs(std::span<uint8_t> inputs) override {

@@ -29,15 +29,22 @@ inline Slave& slave() {
   return s;
 }
 
-// Every reply must fit the mailbox and carry a consistent header; anything else is a bug.
-inline void check_reply(std::span<const uint8_t> reply, size_t n) {
+// Every reply must fit the mailbox data and carry a CoE header with a service a slave sends
+// (Emergency 1, SDO request 2 = abort, SDO response 3, SDO Information 8); a mailbox error is
+// the only other answer. Anything else is a bug.
+inline void check_reply(std::span<const uint8_t> reply, size_t n,
+                        mailbox::Error error = mailbox::Error::None) {
+  if (error != mailbox::Error::None) {
+    if (n != 0) std::abort();
+    return;
+  }
   if (n == 0) return;
-  if (n > reply.size() || n < 10) std::abort();
-  const size_t len = static_cast<size_t>(reply[0] | (reply[1] << 8));
-  if (len + 6 != n) std::abort();
-  const uint8_t type = reply[5] & 0x0F;
-  const uint8_t counter = (reply[5] >> 4) & 0x07;
-  if ((type != 0x00 && type != 0x03) || counter == 0) std::abort();
+  if (n > reply.size() || n < 4) std::abort();
+  const uint8_t service = reply[1] >> 4;
+  if (service != 1 && service != 2 && service != 3 && service != 8) std::abort();
+}
+inline void check_reply(std::span<const uint8_t> reply, mailbox::Answer a) {
+  check_reply(reply, a.length, a.error);
 }
 
 inline EsmState state_of(uint8_t b) {

@@ -28,12 +28,14 @@ class FuzzDevice final : public Application, public MailboxProtocol {
     return {test::kOutputBytes, test::kInputBytes};
   }
   void add_mailbox_protocols(MailboxServer& server) override {
-    server.add(mailbox_type::kCoE, *this);
+    server.add(rackcat::mailbox::Type::CoE, *this);
   }
-  size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply, EsmState) override {
-    const size_t n = std::min(request.size(), reply.size());
-    std::copy_n(request.begin(), n, reply.begin());
-    return n;
+  rackcat::mailbox::Answer on_request(const MailboxRequest& request,
+                                      std::span<uint8_t> reply) override {
+    const size_t n = std::min(request.data.size(), reply.size());
+    std::copy_n(request.data.begin(), n, reply.begin());
+    if (n == 0) return {0, rackcat::mailbox::Error::SizeTooShort};
+    return {n, rackcat::mailbox::Error::None};
   }
   size_t poll(std::span<uint8_t> reply) override {
     if (++n_ % 13 != 0 || reply.size() < 8) return 0;

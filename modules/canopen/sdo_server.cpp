@@ -3,13 +3,12 @@
 #include "coe/abort_code.hpp"
 #include "coe/bits.hpp"
 #include "coe/coe_header.hpp"
-#include "coe/mailbox_header.hpp"
 #include "coe/sdo_command.hpp"
 
 namespace rackcat::modules::canopen {
 
 namespace {
-constexpr size_t kBody = coe::MailboxHeader::kSize + coe::CoeHeader::kSize;
+constexpr size_t kBody = coe::CoeHeader::kSize;
 }
 
 bool CanSdoServer::handle(const CanFrame& request, EsmState state, CanFrame& response,
@@ -29,22 +28,17 @@ bool CanSdoServer::handle(const CanFrame& request, EsmState state, CanFrame& res
     has_response = true;
     return true;
   }
-  // Mailbox header (counter 0: CAN has no repeat service) + CoE header "SDO request".
-  coe::MailboxHeader mh;
-  mh.length = static_cast<uint16_t>(coe::CoeHeader::kSize + 8);
-  mh.type = static_cast<uint8_t>(coe::MailboxType::CoE);
-  mh.encode(request_);
+  // CoE header "SDO request" and the 8 bytes.
   coe::CoeHeader ch;
   ch.service = static_cast<uint8_t>(coe::CoeService::SdoRequest);
-  ch.encode(std::span(request_).subspan(coe::MailboxHeader::kSize));
+  ch.encode(request_);
   std::copy(request.data.begin(), request.data.end(), request_.begin() + kBody);
 
-  const size_t n = server_.handle(request_, reply_, state);
-  if (n == 0) {
+  const auto answer = server_.handle(request_, reply_, state);
+  if (answer.length == 0 && answer.error == mailbox::Error::None) {
     return true;  // the client aborted: no answer
   }
-  const auto reply_header = coe::MailboxHeader::decode(reply_);
-  if (n < kBody + 8 || !reply_header || reply_header->mailbox_type() != coe::MailboxType::CoE) {
+  if (answer.error != mailbox::Error::None || answer.length < kBody + 8) {
     // A mailbox-level error has no CAN equivalent: abort the addressed object.
     std::array<uint8_t, 8> abort{coe::sdo::kAbortCommand, request.data[1], request.data[2],
                                  request.data[3]};

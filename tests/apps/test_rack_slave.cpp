@@ -91,17 +91,20 @@ TEST_F(RackSlaveTest, ProcessDataSizesAreTheDevicesPdoAssignment) {
 TEST_F(RackSlaveTest, MailboxRequestsReachTheDevicesSdoServer) {
   RackSlave slave(default_rack(), dir_.string(), 0);
   to_preop(slave);
-  // Mailbox header (ETG.1000.4 §5.5: length 10, type 3 CoE, counter 1), CoE header (SDO
-  // request, ETG.1000.6 §5.6.1), SDO upload initiate 0x40 of 0x1018:02 (§5.6.2.2).
-  const std::array<uint8_t, 16> request{10,   0,    0,    0,    0, 0x13, 0x00, 0x20,
-                                        0x40, 0x18, 0x10, 0x02, 0, 0,    0,    0};
-  std::array<uint8_t, 128> reply{};
-  const size_t n = slave.coe_mailbox().on_request(request, reply, EsmState::PreOp);
-  ASSERT_GE(n, 16u);
-  EXPECT_EQ(reply[5] & 0x0F, 0x03);                             // CoE
-  EXPECT_EQ(reply[7] >> 4, 0x3);                                // SDO response
-  EXPECT_EQ(reply[8] & 0xE0, 0x40);                             // upload initiate response
-  EXPECT_EQ(sii_u32(reply, 6), sii_u32(slave.eeprom(), 0x0A));  // bytes 12..15 = product code
+  // The mailbox data the firmware hands the CoE protocol: CoE header (SDO request, ETG.1000.6
+  // §5.6.1), SDO upload initiate 0x40 of 0x1018:02 (§5.6.2.2).
+  const std::array<uint8_t, 10> data{0x00, 0x20, 0x40, 0x18, 0x10, 0x02, 0, 0, 0, 0};
+  ecat::MailboxRequest request;
+  request.data = data;
+  request.capacity = 122;
+  request.state = EsmState::PreOp;
+  std::array<uint8_t, 122> reply{};
+  const mailbox::Answer answer = slave.coe_mailbox().on_request(request, reply);
+  ASSERT_EQ(answer.error, mailbox::Error::None);
+  ASSERT_GE(answer.length, 10u);
+  EXPECT_EQ(reply[1] >> 4, 0x3);                                // SDO response
+  EXPECT_EQ(reply[2] & 0xE0, 0x40);                             // upload initiate response
+  EXPECT_EQ(sii_u32(reply, 3), sii_u32(slave.eeprom(), 0x0A));  // bytes 6..9 = product code
 }
 
 TEST_F(RackSlaveTest, StateChangesReachTheDevice) {

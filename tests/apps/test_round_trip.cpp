@@ -27,14 +27,19 @@ using testing::coe_message;
 
 constexpr uint8_t kSdoInfo = 0x08;  // CoE service (ETG.1000.6 Table 29)
 
-// One mailbox request to `app` and every fragment of its answer, the mailbox header's counter
-// (byte 5 bits 4..6) cleared so two devices' answers compare.
+// One mailbox request (header included) to `coe` and the mailbox data of every fragment of
+// its answer (the firmware frames them; the frame carries nothing of the device's).
 Bytes ask(ecat::MailboxProtocol& coe, const Bytes& request) {
   Bytes all;
-  std::vector<uint8_t> reply(1486);
-  size_t n = coe.on_request(request, reply, EsmState::PreOp);
+  std::vector<uint8_t> reply(1480);
+  ecat::MailboxRequest r;
+  r.data = std::span(request).subspan(6, static_cast<size_t>(request[0] | request[1] << 8));
+  r.capacity = 1480;
+  r.state = EsmState::PreOp;
+  const mailbox::Answer answer = coe.on_request(r, reply);
+  EXPECT_EQ(answer.error, mailbox::Error::None);
+  size_t n = answer.length;
   while (n > 0) {
-    reply[5] = static_cast<uint8_t>(reply[5] & 0x8F);
     all.insert(all.end(), reply.begin(), reply.begin() + static_cast<long>(n));
     n = coe.poll(reply);
   }

@@ -1,5 +1,6 @@
 // A slave's SDO server on the test dictionary, with helpers that frame requests the way a
-// master does (ETG.1000.4 §5.6 mailbox header, ETG.1000.6 §5.6.1 CoE header).
+// master does (ETG.1000.4 §5.6 mailbox header, ETG.1000.6 §5.6.1 CoE header) and replies the
+// way the firmware's MailboxServer does (tests/support/mailbox_framing.hpp).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -10,6 +11,7 @@
 #include "coe/sdo_server.hpp"
 #include "tests/coe/test_dictionary.hpp"
 #include "tests/support/coe_frames.hpp"
+#include "tests/support/mailbox_framing.hpp"
 
 namespace rackcat::coe::test {
 
@@ -28,8 +30,9 @@ class SdoTest : public ::testing::Test {
   // Sends one request (next master counter 1..7) and returns the reply mailbox.
   Bytes send(const Bytes& message, EsmState state = EsmState::PreOp, size_t mailbox = 128) {
     Bytes reply(mailbox, 0xEE);
-    const size_t n = server.handle(message, reply, state);
-    reply.resize(n);
+    reply.resize(frame.request(message, reply, [&](auto data, size_t, auto out) {
+      return server.handle(data, out, state);
+    }));
     return reply;
   }
   Bytes sdo(const Bytes& body, EsmState state = EsmState::PreOp, size_t mailbox = 128) {
@@ -40,7 +43,7 @@ class SdoTest : public ::testing::Test {
   }
   Bytes poll(size_t mailbox = 128) {
     Bytes reply(mailbox, 0xEE);
-    reply.resize(server.poll(reply));
+    reply.resize(frame.poll(reply, [&](auto out) { return server.poll(out); }));
     return reply;
   }
   uint8_t next_counter() {
@@ -50,6 +53,7 @@ class SdoTest : public ::testing::Test {
 
   ObjectDictionary od;
   SdoServer server;
+  rackcat::testing::SlaveMailbox frame;
   uint8_t master_counter = 0;
 };
 

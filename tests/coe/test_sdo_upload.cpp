@@ -142,7 +142,10 @@ TEST(SdoServerEmpty, NoDictionaryAbort) {
   SdoServer server(empty);
   const Bytes request = coe_message(1, 2, upload_req(0x1000, 0));
   Bytes reply(128);
-  reply.resize(server.handle(request, reply, EsmState::PreOp));
+  rackcat::testing::SlaveMailbox frame;
+  reply.resize(frame.request(request, reply, [&](auto data, size_t, auto out) {
+    return server.handle(data, out, EsmState::PreOp);
+  }));
   EXPECT_EQ(payload(reply), abort_payload(0x1000, 0, 0x08000023));
 }
 

@@ -107,18 +107,17 @@ void TestApplication::on_state_changed(EsmState from, EsmState to) {
 }
 
 void TestApplication::add_mailbox_protocols(MailboxServer& server) {
-  server.add(mailbox_type::kCoE, *this);
+  server.add(mailbox::Type::CoE, *this);
 }
 
-size_t TestApplication::on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                                   EsmState) {
+mailbox::Answer TestApplication::on_request(const MailboxRequest& request,
+                                            std::span<uint8_t> reply) {
   ++mailbox_requests;
-  last_request.assign(request.begin(), request.end());
-  // Echo: the mailbox header (6 bytes) says how long the message is (ETG.1000.4 §5.5).
-  const size_t len = std::min<size_t>(6 + (request[0] | request[1] << 8), request.size());
-  const size_t n = std::min(len, reply.size());
-  std::copy_n(request.begin(), n, reply.begin());
-  return n;
+  last_request.assign(request.data.begin(), request.data.end());
+  // Echo: the request's mailbox data; the server frames it.
+  const size_t n = std::min(request.data.size(), reply.size());
+  std::copy_n(request.data.begin(), n, reply.begin());
+  return {n, mailbox::Error::None};
 }
 
 size_t TestApplication::poll(std::span<uint8_t> reply) {

@@ -1,6 +1,6 @@
 // A small device for the ESC tests: a fixed SII image hand-built per ETG.2010 (identity,
 // mailbox SMs at 0x1000/0x1080, 4 output and 6 input bytes, strings, general, FMMU and SM
-// categories), a mailbox that echoes every request, and records of what the ESC called.
+// categories), a mailbox that echoes every request's data, and records of what the ESC called.
 #pragma once
 
 #include <cstdint>
@@ -38,8 +38,7 @@ class TestApplication : public Application, public MailboxProtocol {
   void on_state_changed(EsmState from, EsmState to) override;
   ProcessDataSizes process_data_sizes() const override { return sizes; }
   void add_mailbox_protocols(MailboxServer& server) override;
-  size_t on_request(std::span<const uint8_t> request, std::span<uint8_t> reply,
-                    EsmState state) override;
+  mailbox::Answer on_request(const MailboxRequest& request, std::span<uint8_t> reply) override;
   size_t poll(std::span<uint8_t> reply) override;
   bool mailbox_pending() const override { return !pending_emergency.empty(); }
   void update_inputs(std::span<uint8_t> inputs) override;
@@ -56,8 +55,8 @@ class TestApplication : public Application, public MailboxProtocol {
   int outputs_count = 0;
   int inputs_count = 0;
   int mailbox_requests = 0;
-  std::vector<uint8_t> last_request;
-  std::vector<uint8_t> pending_emergency;  // sent by poll() once
+  std::vector<uint8_t> last_request;       // its mailbox data
+  std::vector<uint8_t> pending_emergency;  // mailbox data sent by poll() once
   int polls = 0;                           // poll() calls: the firmware ran with SM1 free
   std::vector<std::pair<EsmState, EsmState>> transitions;
   std::vector<std::pair<int, uint64_t>> syncs;

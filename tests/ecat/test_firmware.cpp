@@ -345,7 +345,7 @@ TEST_F(MailboxTest, CounterCyclesOneToSevenOverEveryMessage) {
     master_writes(coe(static_cast<uint8_t>(i % 7 + 1)));
     counters.push_back(counter_of(master_reads()));
   }
-  app.pending_emergency = {2, 0, 0, 0, 0, 0x03, 0x00, 0x10};
+  app.pending_emergency = {0x00, 0x10};
   fw->poll();
   counters.push_back(counter_of(master_reads()));
   EXPECT_EQ(counters, (std::vector<uint8_t>{1, 2, 3, 4, 5, 6, 7, 1, 2}));
@@ -396,6 +396,54 @@ TEST_F(MailboxTest, HeaderChecksAnswerWithMailboxErrors) {
   EXPECT_EQ(app.mailbox_requests, 0);
 }
 
+// ETG.1000.6 §5.2.3: an EoE request (type 2) to a slave without EoE - the whole error reply:
+// Length 4, Address of the request, type 0 with the slave's counter 1, service 0x0001,
+// detail 0x0002.
+TEST_F(MailboxTest, MailboxErrorGoldenBytes) {
+  master_writes({0x04, 0x00, 0x34, 0x12, 0x00, 0x12, 0xAA, 0xBB, 0xCC, 0xDD});
+  const auto reply = master_reads();
+  ASSERT_GE(reply.size(), 10u);
+  EXPECT_EQ(std::vector<uint8_t>(reply.begin(), reply.begin() + 10),
+            (std::vector<uint8_t>{0x04, 0x00, 0x34, 0x12, 0x00, 0x10, 0x01, 0x00, 0x02, 0x00}));
+}
+
+// A protocol sees only the mailbox data and answers a header problem of its own with an error
+// code; the server frames both kinds of answer.
+struct ErrorProtocol final : MailboxProtocol {
+  mailbox::Answer on_request(const MailboxRequest& r, std::span<uint8_t> reply) override {
+    seen.assign(r.data.begin(), r.data.end());
+    address = r.address;
+    priority = r.priority;
+    capacity = r.capacity;
+    if (r.data.size() < 2) return {0, mailbox::Error::SizeTooShort};
+    reply[0] = 0xA5;
+    return {1, mailbox::Error::None};
+  }
+  std::vector<uint8_t> seen;
+  uint16_t address = 0;
+  uint8_t priority = 0;
+  size_t capacity = 0;
+};
+
+TEST_F(MailboxTest, ProtocolsGetTheDataAndTheServerFramesTheirAnswers) {
+  ErrorProtocol eoe;
+  fw->mailbox().add(mailbox::Type::EoE, eoe);
+  // Length 3, address 0x1001, priority 2, EoE with counter 1.
+  master_writes({0x03, 0x00, 0x01, 0x10, 0x80, 0x12, 0x01, 0x02, 0x03});
+  EXPECT_EQ(eoe.seen, (std::vector<uint8_t>{0x01, 0x02, 0x03}));
+  EXPECT_EQ(eoe.address, 0x1001);
+  EXPECT_EQ(eoe.priority, 2);
+  EXPECT_EQ(eoe.capacity, kMbxSize - 6u);
+  auto reply = master_reads();
+  EXPECT_EQ(std::vector<uint8_t>(reply.begin(), reply.begin() + 7),
+            (std::vector<uint8_t>{0x01, 0x00, 0x00, 0x00, 0x00, 0x12, 0xA5}));
+  // Too short for the protocol's own header: mailbox error 0x0006 from the server.
+  master_writes({0x01, 0x00, 0x01, 0x10, 0x00, 0x22, 0x01});
+  reply = master_reads();
+  EXPECT_EQ(std::vector<uint8_t>(reply.begin(), reply.begin() + 10),
+            (std::vector<uint8_t>{0x04, 0x00, 0x01, 0x10, 0x00, 0x20, 0x01, 0x00, 0x06, 0x00}));
+}
+
 TEST_F(MailboxTest, RequestWaitsWhileSm1IsFull) {
   master_writes(coe(1));
   pdi.mem[0x0805] |= 0x08;  // a second request before the master read the first reply
@@ -408,12 +456,10 @@ TEST_F(MailboxTest, RequestWaitsWhileSm1IsFull) {
 }
 
 struct BootProtocol final : MailboxProtocol {
-  size_t on_request(std::span<const uint8_t>, std::span<uint8_t> reply, EsmState) override {
+  mailbox::Answer on_request(const MailboxRequest&, std::span<uint8_t> reply) override {
     ++requests;
-    std::fill_n(reply.begin(), 8, uint8_t{0});
-    reply[0] = 2;
-    reply[5] = mailbox_type::kFoE;
-    return 8;
+    std::fill_n(reply.begin(), 2, uint8_t{0});
+    return {2, mailbox::Error::None};
   }
   void reset() override { ++resets; }
   int requests = 0;
@@ -422,16 +468,16 @@ struct BootProtocol final : MailboxProtocol {
 
 TEST_F(MailboxTest, ProtocolsServeTheStatesTheyRegisteredFor) {
   BootProtocol foe;
-  fw->mailbox().add(mailbox_type::kFoE, foe, MailboxServer::kBoot);
-  master_writes(coe(1, 0, mailbox_type::kFoE));  // PREOP: FoE is a bootstrap protocol here
+  fw->mailbox().add(mailbox::Type::FoE, foe, MailboxServer::kBoot);
+  master_writes(coe(1, 0, static_cast<uint8_t>(mailbox::Type::FoE)));  // PREOP: FoE is a bootstrap protocol here
   EXPECT_EQ(le::get16(&master_reads()[8]), 0x0002);
   EXPECT_EQ(foe.requests, 0);
   ASSERT_EQ(request(0x01), 0x0001);
   EXPECT_EQ(foe.resets, 1);  // the mailbox closed
   bootstrap_mailbox_in_sii();
   ASSERT_EQ(request(0x03), 0x0003);
-  master_writes(coe(2, 0, mailbox_type::kFoE));
-  EXPECT_EQ(master_reads()[5] & 0x0F, mailbox_type::kFoE);
+  master_writes(coe(2, 0, static_cast<uint8_t>(mailbox::Type::FoE)));
+  EXPECT_EQ(master_reads()[5] & 0x0F, static_cast<uint8_t>(mailbox::Type::FoE));
   EXPECT_EQ(foe.requests, 1);
 }
 

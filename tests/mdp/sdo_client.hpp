@@ -3,7 +3,8 @@
 // §5.6.2 (CoE header: service 2 request / 3 response in bits 12..15; SDO command specifiers:
 // download initiate 0x21 (+0x10 complete access; expedited 0x23/0x27/0x2B/0x2F), upload
 // initiate 0x40 (0x50 complete access), upload segment 0x60 (+toggle 0x10), abort 0x80 with
-// the code in bytes 4..7 of the SDO part). It talks to mdp::Device::handle_mailbox.
+// the code in bytes 4..7 of the SDO part). It talks to mdp::Device::coe_request,
+// framed as the firmware frames it (tests/support/mailbox_framing.hpp).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "mdp/device.hpp"
+#include "tests/support/mailbox_framing.hpp"
 
 namespace rackcat::mdp::testing {
 
@@ -130,7 +132,7 @@ class SdoClient {
                                 0x00,    0x20};  // CoE number 0, service 2 (SDO request)
     req.insert(req.end(), body.begin(), body.end());
     std::vector<uint8_t> reply(128);
-    const size_t n = device_.handle_mailbox(req, reply);
+    const size_t n = frame_.request(req, reply, [&](auto data, size_t, auto out) { return device_.coe_request(data, out); });
     if (n < 8) return {};
     const size_t mbx_len = reply[0] | (reply[1] << 8);
     EXPECT_EQ(reply[5] & 0x0F, 0x03) << "CoE reply";
@@ -141,6 +143,7 @@ class SdoClient {
 
   Device& device_;
   uint8_t counter_ = 0;
+  rackcat::testing::SlaveMailbox frame_;  // the firmware's side of the frame
 };
 
 // The fixture of the SDO tests: a default rack's device, brought to PREOP (ETG.1000.6 §5.6.1:

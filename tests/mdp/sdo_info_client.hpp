@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "mdp/device.hpp"
+#include "tests/support/mailbox_framing.hpp"
 
 namespace rackcat::mdp::testing {
 
@@ -37,7 +38,7 @@ class SdoInfoClient {
     req.insert(req.end(), body.begin(), body.end());
     std::vector<uint8_t> out;
     std::vector<uint8_t> reply(1024);
-    size_t n = device_.handle_mailbox(req, reply);
+    size_t n = frame_.request(req, reply, [&](auto data, size_t, auto out) { return device_.coe_request(data, out); });
     for (int guard = 0; guard < 1000 && n >= 12; ++guard) {
       const size_t mbx_len = reply[0] | (reply[1] << 8);
       EXPECT_EQ(reply[7] >> 4, 0x08) << "SDO Information service";
@@ -48,7 +49,7 @@ class SdoInfoClient {
       }
       out.insert(out.end(), reply.begin() + 12, reply.begin() + 6 + static_cast<long>(mbx_len));
       if (!(op & 0x80)) break;
-      n = device_.poll_mailbox(reply);
+      n = frame_.poll(reply, [&](auto out) { return device_.coe_poll(out); });
     }
     return out;
   }
@@ -104,6 +105,7 @@ class SdoInfoClient {
  private:
   Device& device_;
   uint8_t counter_ = 0;
+  rackcat::testing::SlaveMailbox frame_;  // the firmware's side of the frame
 };
 
 }  // namespace rackcat::mdp::testing

@@ -74,15 +74,16 @@ class RackTest : public ::testing::Test {
     return std::bit_cast<float>(static_cast<uint32_t>(obj(index).get_u(sub)));
   }
 
-  // CoE Emergency mailbox messages (ETG.1000.6 §5.6.4): 6-byte mailbox header, 2-byte CoE
-  // header (service 1 = emergency), error code (LE16), error register, 5 data bytes.
+  // CoE Emergency messages (ETG.1000.6 §5.6.4) as the device's CoE poll gives their mailbox
+  // data: 2-byte CoE header (service 1 = emergency), error code (LE16), error register, 5
+  // data bytes.
   std::vector<Emergency> drain_emergencies() {
     std::vector<Emergency> out;
     uint8_t buf[256];
-    for (size_t n; (n = device.poll_mailbox(buf)) > 0;) {
-      if (n < 16 || (buf[5] & 0x0F) != 0x03 || (buf[7] >> 4) != 0x01) continue;
-      Emergency e{static_cast<uint16_t>(buf[8] | buf[9] << 8), buf[10], {}};
-      std::copy(buf + 11, buf + 16, e.data.begin());
+    for (size_t n; (n = device.coe_poll(buf)) > 0;) {
+      if (n < 10 || (buf[1] >> 4) != 0x01) continue;
+      Emergency e{static_cast<uint16_t>(buf[2] | buf[3] << 8), buf[4], {}};
+      std::copy(buf + 5, buf + 10, e.data.begin());
       out.push_back(e);
     }
     return out;

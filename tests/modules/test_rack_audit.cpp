@@ -14,7 +14,7 @@ using testing::RackTest;
 
 constexpr uint16_t kRim2Info = 0x2021;
 
-// An expedited 4-byte SDO download (tests/support/coe_frames.hpp) through the device's mailbox;
+// An expedited 4-byte SDO download (tests/support/coe_frames.hpp) through the device's CoE;
 // returns the SDO command byte of the reply (0x60 = done, 0x80 = abort).
 uint8_t sdo_write_u32(mdp::Device& device, uint16_t index, uint8_t sub, uint32_t value) {
   static uint8_t counter = 0;
@@ -22,8 +22,9 @@ uint8_t sdo_write_u32(mdp::Device& device, uint16_t index, uint8_t sub, uint32_t
   const rackcat::testing::Bytes req = rackcat::testing::coe_message(
       counter, 2, rackcat::testing::download_expedited(index, sub, value, 4));
   uint8_t reply[128] = {};
-  const size_t n = device.handle_mailbox(req, reply);
-  return n >= 9 ? reply[8] : 0xFF;
+  // The mailbox data after the 6-byte header: what the firmware hands the device's CoE.
+  const auto answer = device.coe_request(std::span(req).subspan(6), reply);
+  return answer.length >= 3 ? reply[2] : 0xFF;
 }
 
 TEST_F(RackTest, ExceptionMaskWriteReevaluatesTheTreeAtOnce) {

@@ -1,5 +1,5 @@
 // Uses the installed CoE layer alone: one object, one SDO upload of it (ETG.1000.6 §5.6.2.2,
-// expedited upload of 0x1000:00 through a complete mailbox frame). Exit 0 when the reply
+// expedited upload of 0x1000:00, the CoE data of one mailbox message). Exit 0 when the reply
 // carries the value.
 #include <array>
 #include <cstdio>
@@ -18,17 +18,15 @@ int main() {
                         {0x91, 0x01, 0x0F, 0x00}));
   od.add(std::move(o));
   coe::SdoServer sdo(od);
-  // Mailbox header (length 10, type 3 CoE, counter 1), CoE header (SDO request), upload
-  // initiate 0x40 of 0x1000:00.
-  const std::array<uint8_t, 16> request{10,   0,    0,    0,    0, 0x13, 0x00, 0x20,
-                                        0x40, 0x00, 0x10, 0x00, 0, 0,    0,    0};
-  std::array<uint8_t, 128> reply{};
-  const size_t n = sdo.handle(request, reply, EsmState::PreOp);
-  if (n < 16 || reply[12] != 0x91 || reply[13] != 0x01 || reply[14] != 0x0F) {
+  // CoE header (SDO request), upload initiate 0x40 of 0x1000:00.
+  const std::array<uint8_t, 10> request{0x00, 0x20, 0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0};
+  std::array<uint8_t, 122> reply{};
+  const size_t n = sdo.handle(request, reply, EsmState::PreOp).length;
+  if (n < 10 || reply[6] != 0x91 || reply[7] != 0x01 || reply[8] != 0x0F) {
     std::fprintf(stderr, "coe_only: unexpected SDO reply (%zu bytes)\n", n);
     return 1;
   }
-  std::printf("coe_only: 0x1000:00 = 0x%02x%02x%02x%02x\n", reply[15], reply[14], reply[13],
-              reply[12]);
+  std::printf("coe_only: 0x1000:00 = 0x%02x%02x%02x%02x\n", reply[9], reply[8], reply[7],
+              reply[6]);
   return 0;
 }
