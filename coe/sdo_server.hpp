@@ -20,8 +20,8 @@
 #include <span>
 #include <vector>
 
-#include "coe/abort_code.hpp"
 #include "base/mailbox_error.hpp"
+#include "coe/abort_code.hpp"
 #include "coe/access.hpp"
 #include "coe/emergency_queue.hpp"
 #include "coe/object_dictionary.hpp"

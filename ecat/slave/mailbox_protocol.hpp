@@ -23,7 +23,7 @@ namespace rackcat::ecat {
 // One request as the server hands it to the protocol of its Type.
 struct MailboxRequest {
   std::span<const uint8_t> data;  // the header's Length bytes after the mailbox header
-  size_t capacity = 0;  // data bytes SM0 holds (its size minus the header): a full segment
+  size_t capacity = 0;   // data bytes SM0 holds (its size minus the header): a full segment
   uint16_t address = 0;  // the header's Address (ETG.1000.4 §5.6: the source station)
   uint8_t priority = 0;  // the header's Priority (0..3)
   EsmState state = EsmState::Init;

@@ -19,8 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   request[1] = 0x80;  // CoE header: SDO Information
   std::copy(data + 1, data + size, request.begin() + 2);
 
-  const rackcat::mailbox::Answer answer =
-      s.server.handle(request, reply, rackcat::EsmState::PreOp);
+  const rackcat::mailbox::Answer answer = s.server.handle(request, reply, rackcat::EsmState::PreOp);
   fuzz::check_reply(reply, answer);
   size_t n = answer.length;
   int expected_left = -1;

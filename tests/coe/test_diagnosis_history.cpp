@@ -233,9 +233,9 @@ class HistorySdoTest : public HistoryTest {
   Bytes sdo(const Bytes& body) {
     Bytes reply(256, 0xEE);
     counter = counter >= 7 ? 1 : counter + 1;
-    reply.resize(frame.request(coe_message(counter, 2, body), reply, [&](auto data, size_t, auto out) {
-      return server.handle(data, out, EsmState::Op);
-    }));
+    reply.resize(frame.request(
+        coe_message(counter, 2, body), reply,
+        [&](auto data, size_t, auto out) { return server.handle(data, out, EsmState::Op); }));
     return payload(reply);
   }
   SdoServer server;

@@ -69,10 +69,9 @@ TEST_F(SdoTest, RandomMailboxesNeverCrashOrOverflow) {
     }
     const size_t mailbox = 16 + rng() % 120;
     Bytes reply(mailbox + 8, 0xEE);
-    const size_t n = frame.request(req, std::span(reply).first(mailbox),
-                                   [&](auto data, size_t, auto out) {
-                                     return server.handle(data, out, EsmState::PreOp);
-                                   });
+    const size_t n = frame.request(
+        req, std::span(reply).first(mailbox),
+        [&](auto data, size_t, auto out) { return server.handle(data, out, EsmState::PreOp); });
     ASSERT_LE(n, mailbox);
     for (size_t k = mailbox; k < reply.size(); ++k) ASSERT_EQ(reply[k], 0xEE);
     if (n) {

@@ -469,7 +469,8 @@ struct BootProtocol final : MailboxProtocol {
 TEST_F(MailboxTest, ProtocolsServeTheStatesTheyRegisteredFor) {
   BootProtocol foe;
   fw->mailbox().add(mailbox::Type::FoE, foe, MailboxServer::kBoot);
-  master_writes(coe(1, 0, static_cast<uint8_t>(mailbox::Type::FoE)));  // PREOP: FoE is a bootstrap protocol here
+  master_writes(coe(
+      1, 0, static_cast<uint8_t>(mailbox::Type::FoE)));  // PREOP: FoE is a bootstrap protocol here
   EXPECT_EQ(le::get16(&master_reads()[8]), 0x0002);
   EXPECT_EQ(foe.requests, 0);
   ASSERT_EQ(request(0x01), 0x0001);

@@ -32,7 +32,8 @@ TEST(MailboxSm, WritingLastByteHandsRequestOverAndReplyFillsSm1) {
   EXPECT_EQ(line.master->fpwr(kStation, kMbxOutStart, request).wkc, 1);
   EXPECT_EQ(line.app(0).mailbox_requests, 1);
   // The device sees the mailbox data; the header is the firmware's.
-  EXPECT_EQ(line.app(0).last_request, std::vector<uint8_t>(request.begin() + 6, request.begin() + 10));
+  EXPECT_EQ(line.app(0).last_request,
+            std::vector<uint8_t>(request.begin() + 6, request.begin() + 10));
   EXPECT_EQ(sm_status(line, 0) & 0x08, 0);     // the µC took the request: SM0 empty again
   EXPECT_EQ(sm_status(line, 1) & 0x08, 0x08);  // reply waiting in SM1
   const auto reply = line.master->fprd(kStation, kMbxInStart, kMbxSize);

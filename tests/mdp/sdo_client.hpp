@@ -132,7 +132,8 @@ class SdoClient {
                                 0x00,    0x20};  // CoE number 0, service 2 (SDO request)
     req.insert(req.end(), body.begin(), body.end());
     std::vector<uint8_t> reply(128);
-    const size_t n = frame_.request(req, reply, [&](auto data, size_t, auto out) { return device_.coe_request(data, out); });
+    const size_t n = frame_.request(
+        req, reply, [&](auto data, size_t, auto out) { return device_.coe_request(data, out); });
     if (n < 8) return {};
     const size_t mbx_len = reply[0] | (reply[1] << 8);
     EXPECT_EQ(reply[5] & 0x0F, 0x03) << "CoE reply";

@@ -38,7 +38,8 @@ class SdoInfoClient {
     req.insert(req.end(), body.begin(), body.end());
     std::vector<uint8_t> out;
     std::vector<uint8_t> reply(1024);
-    size_t n = frame_.request(req, reply, [&](auto data, size_t, auto out) { return device_.coe_request(data, out); });
+    size_t n = frame_.request(
+        req, reply, [&](auto data, size_t, auto out) { return device_.coe_request(data, out); });
     for (int guard = 0; guard < 1000 && n >= 12; ++guard) {
       const size_t mbx_len = reply[0] | (reply[1] << 8);
       EXPECT_EQ(reply[7] >> 4, 0x08) << "SDO Information service";

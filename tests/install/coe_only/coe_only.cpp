@@ -26,7 +26,6 @@ int main() {
     std::fprintf(stderr, "coe_only: unexpected SDO reply (%zu bytes)\n", n);
     return 1;
   }
-  std::printf("coe_only: 0x1000:00 = 0x%02x%02x%02x%02x\n", reply[9], reply[8], reply[7],
-              reply[6]);
+  std::printf("coe_only: 0x1000:00 = 0x%02x%02x%02x%02x\n", reply[9], reply[8], reply[7], reply[6]);
   return 0;
 }
