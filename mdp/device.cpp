@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 
 #include "coe/bits.hpp"
 #include "coe/process_image.hpp"
@@ -26,7 +25,6 @@
 #include "mdp/parameter_store.hpp"
 #include "mdp/parameter_writer.hpp"
 #include "mdp/state_directory.hpp"
-#include "mdp/sync_manager_layout.hpp"
 
 namespace rackcat::mdp {
 
@@ -51,19 +49,9 @@ constexpr uint16_t kAlModuleIdentMismatch = 0x0070;
 constexpr uint16_t kAlInvalidOutputConfig = 0x001D;
 constexpr uint16_t kAlInvalidInputConfig = 0x001E;
 
-// Seconds of a "YYYY-MM-DD HH:MM:SS" text (UTC), already validated.
-int64_t parse_clock(std::string_view s) {
-  std::tm tm{};
-  std::sscanf(std::string(s).c_str(), "%d-%d-%d %d:%d:%d", &tm.tm_year, &tm.tm_mon, &tm.tm_mday,
-              &tm.tm_hour, &tm.tm_min, &tm.tm_sec);
-  tm.tm_year -= 1900;
-  tm.tm_mon -= 1;
-  return static_cast<int64_t>(timegm(&tm));
-}
-
 }  // namespace
 
-struct Device::Impl {
+struct Device::Impl final : DeviceRuntime {
   Device* self = nullptr;
   RackConfig config;
   coe::ObjectDictionary od;
@@ -79,30 +67,23 @@ struct Device::Impl {
   std::vector<uint8_t> running_firmware;  // the container the device "runs" since power-on
   FirmwareInfo built_in_firmware;         // the rack file's versions: what runs without a container
   std::string firmware_report;
-  std::vector<uint8_t> default_payload;   // the parameter set as shipped (factory defaults)
+  std::vector<uint8_t> default_payload;  // the parameter set as shipped (factory defaults)
   std::string state_dir;
   std::string load_report;
   EsmState state = EsmState::Init;
   std::vector<CycleListener*> listeners;
   SyncStatistics stats[2];
   std::chrono::steady_clock::time_point power_on = std::chrono::steady_clock::now();
-  int64_t clock_offset_s = 0;  // clock written to 0x2000:08 minus the system clock
+  int64_t clock_offset = 0;    // clock written to 0x2000:08 minus the system clock
   bool reset_factory = false;  // the 0xFBF0 command the worker executes is a factory reset
   uint64_t last_sync_ns = 0;
   // 0xF6F0/0xF6F2 (input latch times), looked up once when the dictionary is built: the cyclic
-  // path does no dictionary lookup (issue 16).
+  // path does no dictionary lookup.
   Object* input_latch_local = nullptr;
   Object* input_latch_esc = nullptr;
   std::chrono::steady_clock::time_point last_sync_at{};
   coe::diag::History history{kDiagnosisMessages};
   std::vector<uint8_t> enumerated;  // per module: enumerated now (module_enumeration.hpp)
-  // A command executed in validate_write, applied to its object in after_write.
-  struct PendingCommand {
-    uint8_t status = 0;
-    std::vector<uint8_t> response;
-    bool executed = false;  // the write carried a command (not a write-back)
-  } pending;
-
   template <class F>
   void notify(F&& f) {
     for (CycleListener* l : listeners) f(*l);
@@ -140,7 +121,7 @@ struct Device::Impl {
   void power_on_reset(const ParameterWriter::Result& stored) {
     od.for_each([](Object& o) { o.load_defaults(); });
     history.bind(*od.find(coe::diag::kIndex));
-    clock_offset_s = 0;
+    clock_offset = 0;
     load_report = stored.report;
     if (stored.stored) {
       if (std::string why = refuse(stored.bytes); !why.empty()) {
@@ -152,18 +133,6 @@ struct Device::Impl {
     image->compile();
   }
 
-  // Status (subindex 2) and response (subindex 3: status, 0, response bytes) of a command
-  // whose worker job has finished.
-  void complete(uint16_t index, uint8_t status, std::span<const uint8_t> response = {}) {
-    Object* o = od.find(index);
-    if (o == nullptr) return;
-    o->set_u(2, status);
-    auto resp = o->bytes(3);
-    std::fill(resp.begin(), resp.end(), 0);
-    if (!resp.empty()) resp[0] = status;
-    for (size_t i = 0; i < response.size() && i + 2 < resp.size(); ++i) resp[i + 2] = response[i];
-  }
-
   // Finishes the commands whose file work the worker has done (ESC thread; called before a
   // command object is read and whenever the mailbox is idle).
   void complete_jobs() {
@@ -171,27 +140,28 @@ struct Device::Impl {
     using Job = ParameterWriter::Job;
     if (auto r = writer->take(Job::Store)) {
       if (!r->ok) load_report = r->report;
-      complete(0xFBF2, r->ok ? cmd::kStatusDoneNoResponse : cmd::kStatusError);
+      complete_command(od, 0xFBF2, r->ok ? cmd::kStatusDoneNoResponse : cmd::kStatusError);
     }
     if (auto r = writer->take(Job::Checksum)) {
-      complete(0xFBF3, r->ok ? cmd::kStatusDoneWithResponse : cmd::kStatusError, r->bytes);
+      complete_command(od, 0xFBF3, r->ok ? cmd::kStatusDoneWithResponse : cmd::kStatusError,
+                       r->bytes);
     }
     if (auto r = writer->take(Job::Load)) {
       std::string why = r->ok ? refuse(r->stored ? r->bytes : default_payload) : r->report;
       load_report = why.empty() ? r->report : why;
       if (!why.empty()) {
-        complete(0xFBF4, cmd::kStatusError);
+        complete_command(od, 0xFBF4, cmd::kStatusError);
       } else {
         params->apply(r->stored ? r->bytes : default_payload);
         image->compile();
-        complete(0xFBF4, cmd::kStatusDoneNoResponse);
+        complete_command(od, 0xFBF4, cmd::kStatusDoneNoResponse);
         notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
       }
     }
     if (auto r = writer->take(Job::Reset)) {
       if (!r->ok) {
         load_report = r->report;
-        complete(0xFBF0, cmd::kStatusError);
+        complete_command(od, 0xFBF0, cmd::kStatusError);
       } else {
         // The reset restarts the firmware: a container installed since power-on runs now (read
         // and verified by the worker with the reset job).
@@ -204,71 +174,34 @@ struct Device::Impl {
     }
   }
 
-  void clear_latched() {
-    for (uint16_t index : {0xF390, 0xF391, 0xF392, 0xF393, 0xF394, 0xF396, 0xF398}) {
-      if (Object* o = od.find(index)) {
-        for (const auto& e : o->entries()) {
-          if (e.subindex > 0 || o->code() == coe::ObjectCode::Var) o->set_u(e.subindex, 0);
-        }
-      }
-    }
-    // 0x2rr1:08 bits 31..2 are latched, bits 1..0 the live RIM state (guide §3.3).
-    for (const auto& r : config.rims) {
-      if (Object* o = od.find(rim_info_index(r.number))) o->set_u(0x08, o->get_u(0x08) & 0x3);
-    }
+  // --- DeviceRuntime: what the objects' behaviour (mdp/objects_*.cpp) asks of the device.
+  int64_t clock_offset_s() const override { return clock_offset; }
+  void set_clock_offset_s(int64_t offset) override { clock_offset = offset; }
+  void recompile_process_image() override { image->compile(); }
+  SyncStatistics& sync_statistics(bool outputs) override { return stats[outputs ? 0 : 1]; }
+  std::chrono::steady_clock::time_point power_on_time() const override { return power_on; }
+  void detect_modules() override {
+    self->enumerate_modules(std::vector<uint8_t>(config.modules.size(), 1));
+    notify([&](CycleListener& l) { l.on_detect_modules(*self); });
   }
-
-  // Status, response, and subindex 1 back to its read value (the capability bytes, or zeros), so
-  // the image never holds a command sequence and a complete-access write-back executes nothing.
-  void finish_command(Object& obj) {
-    obj.set_u(2, pending.status);
-    auto resp = obj.bytes(3);
-    std::fill(resp.begin(), resp.end(), 0);
-    if (!resp.empty()) resp[0] = pending.status;
-    for (size_t i = 0; i < pending.response.size() && i + 2 < resp.size(); ++i) {
-      resp[i + 2] = pending.response[i];
-    }
-    restore_command(obj);
+  void start_device_reset(bool factory) override {
+    reset_factory = factory;
+    writer->submit_reset(params->fingerprint(), reset_factory,
+                         [this, store = firmware.get(), vendor = config.control.vendor_id,
+                          product = config.control.product_code] {
+                           reset_firmware = read_firmware(*store, vendor, product);
+                         });
   }
-  static void restore_command(Object& obj) {
-    const auto& def = obj.entry(1)->default_value;
-    auto cmd = obj.bytes(1);
-    std::fill(cmd.begin(), cmd.end(), 0);
-    std::copy_n(def.begin(), std::min(cmd.size(), def.size()), cmd.begin());
+  void reset_exceptions() override {
+    clear_latched_exceptions(config, od);
+    notify([&](CycleListener& l) { l.on_exception_reset(*self); });
   }
-
-  // Wraps the builder's byte-sequence check of a command object with `execute`, run once the
-  // bytes are accepted; `apply` runs after the write is committed.
-  void command_hooks(uint16_t index,
-                     const std::function<AbortCode(std::span<const uint8_t>)>& execute,
-                     const std::function<void(Object&)>& apply) {
-    Object* o = od.find(index);
-    auto check = o->hooks.validate_write;
-    o->hooks.validate_write = [this, check, execute](const Object& obj, int subindex,
-                                                     std::span<const uint8_t> data, EsmState s) {
-      if (AbortCode rc = check(obj, subindex, data, s); rc != AbortCode::None) return rc;
-      pending = PendingCommand{};
-      const auto cmd_bytes =
-          subindex == 1    ? data
-          : subindex == -1 ? data.subspan(obj.entry(1)->bit_offset / 8, obj.entry(1)->byte_length())
-                           : std::span<const uint8_t>{};
-      // A complete access writing back what it read (the builder's check lets that pass)
-      // carries no command.
-      const auto current = obj.bytes(1);
-      if (cmd_bytes.empty() || (subindex == -1 && std::equal(cmd_bytes.begin(), cmd_bytes.end(),
-                                                             current.begin(), current.end()))) {
-        return AbortCode::None;
-      }
-      pending.executed = true;
-      return execute(cmd_bytes);
-    };
-    o->hooks.after_write = [this, apply](Object& obj, int) {
-      if (pending.executed) apply(obj);
-      pending.executed = false;
-    };
+  void start_store() override { writer->submit_store(params->fingerprint(), params->capture()); }
+  void start_checksum(uint8_t algorithm) override {
+    writer->submit_checksum(params->fingerprint(), algorithm, default_payload);
   }
-
-  void install_hooks();
+  void start_load() override { writer->submit_load(params->fingerprint()); }
+  void complete_commands() override { complete_jobs(); }
 
   // One diagnosis message and, when stored with 0x10F3:05 bit 0, its Emergency.
   coe::diag::AddResult emit(uint16_t text_id, uint16_t code, uint8_t reg,
@@ -415,123 +348,6 @@ struct Device::Impl {
   }
 };
 
-void Device::Impl::install_hooks() {
-  // 0x2000:08 Clock: the system clock plus the offset last written (not kept over a reset).
-  if (Object* o = od.find(0x2000)) {
-    o->hooks.before_read = [this](Object& obj, int subindex) {
-      if (subindex != 0x08 && subindex != -1) return;
-      const std::time_t t = std::time(nullptr) + clock_offset_s;
-      std::tm tm{};
-      gmtime_r(&t, &tm);
-      char buf[80];
-      std::snprintf(buf, sizeof buf, "%04d-%02d-%02d %02d:%02d:%02d", tm.tm_year + 1900,
-                    tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
-      obj.set_string(0x08, buf);
-    };
-    o->hooks.after_write = [this](Object& obj, int subindex) {
-      if (subindex != 0x08 && subindex != -1) return;
-      const std::string text = obj.get_string(0x08);
-      if (is_valid_clock(text)) clock_offset_s = parse_clock(text) - std::time(nullptr);
-    };
-  }
-  // 0x1C12/0x1C13: a new assignment recompiles the process image (mailbox path, PREOP only).
-  // The user PDOs likewise: a new mapping of an assigned PDO changes the SM2/SM3 sizes the ESM
-  // checks on PREOP->SAFEOP.
-  for (uint16_t index : {uint16_t{0x1C12}, uint16_t{0x1C13}, sm::kUserRxPdo, sm::kUserTxPdo}) {
-    od.find(index)->hooks.after_write = [this](Object&, int) { image->compile(); };
-  }
-  // 0x1C32/0x1C33: counters from the cyclic path; Get Cycle Time = 2 resets them.
-  for (int dir = 0; dir < 2; ++dir) {
-    Object* o = od.find(dir == 0 ? 0x1C32 : 0x1C33);
-    o->hooks.before_read = [this, dir](Object& obj, int) {
-      obj.set_u(0x0B, stats[dir].sm_event_missed);
-      obj.set_u(0x0C, stats[dir].cycle_time_too_small);
-      obj.set_u(0x20, stats[dir].sync_error ? 1 : 0);
-    };
-    o->hooks.after_write = [this, dir](Object& obj, int subindex) {
-      if ((subindex == 0x08 || subindex == -1) && obj.get_u(0x08) == 2) {
-        stats[dir] = SyncStatistics{};
-      }
-    };
-  }
-  od.find(0xF9F6)->hooks.before_read = [this](Object& obj, int) {
-    obj.set_u(0, static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::seconds>(
-                                           std::chrono::steady_clock::now() - power_on)
-                                           .count()));
-  };
-
-  // 0xF002 Detect Modules: the detected list becomes the configured rack, then drivers remove
-  // what is offline (modules/, Detect Modules Override).
-  od.find(0xF002)->hooks.after_write = [this](Object& obj, int) {
-    const auto c = obj.bytes(1);
-    if (!std::equal(c.begin(), c.end(), cmd::kScan.begin(), cmd::kScan.end())) return;
-    // Every configured module; the rack then narrows it to what it detects (guide Table 23).
-    self->enumerate_modules(std::vector<uint8_t>(config.modules.size(), 1));
-    notify([&](CycleListener& l) { l.on_detect_modules(*self); });
-    obj.set_u(2, cmd::kStatusScanComplete);
-    restore_command(obj);
-  };
-
-  // 0xFBF0 device / factory reset. The worker deletes (factory) and reads back the stored
-  // file; complete_jobs() then resets every object and tells the listeners (the adapter
-  // restarts the ESC side once the master has read the answer).
-  command_hooks(
-      0xFBF0,
-      [this](std::span<const uint8_t> c) {
-        reset_factory = c[5] == cmd::kFactoryReset;
-        writer->submit_reset(params->fingerprint(), reset_factory,
-                             [this, store = firmware.get(), vendor = config.control.vendor_id,
-                              product = config.control.product_code] {
-                               reset_firmware = read_firmware(*store, vendor, product);
-                             });
-        pending.status = cmd::kStatusExecuting;
-        return AbortCode::None;
-      },
-      [this](Object& obj) { finish_command(obj); });
-  // 0xFBF1 exception reset.
-  command_hooks(
-      0xFBF1, [](std::span<const uint8_t>) { return AbortCode::None; },
-      [this](Object& obj) {
-        clear_latched();
-        notify([&](CycleListener& l) { l.on_exception_reset(*self); });
-        pending.status = cmd::kStatusDoneNoResponse;
-        finish_command(obj);
-      });
-  // 0xFBF2 store: the snapshot is taken now, written by the worker (status 255 until done).
-  command_hooks(
-      0xFBF2,
-      [this](std::span<const uint8_t>) {
-        writer->submit_store(params->fingerprint(), params->capture());
-        pending.status = cmd::kStatusExecuting;
-        return AbortCode::None;
-      },
-      [this](Object& obj) { finish_command(obj); });
-  // 0xFBF3 checksum over the parameters as stored once the commands before it are done
-  // (the shipped defaults when nothing valid is stored), computed by the worker.
-  command_hooks(
-      0xFBF3,
-      [this](std::span<const uint8_t> c) {
-        const uint8_t algo = c[0] == cmd::kChecksumDefault ? cmd::kChecksumMd5 : c[0];
-        writer->submit_checksum(params->fingerprint(), algo, default_payload);
-        pending.status = cmd::kStatusExecuting;
-        return AbortCode::None;
-      },
-      [this](Object& obj) { finish_command(obj); });
-  // 0xFBF4 load: the stored file, or the shipped defaults when nothing is stored; read by the
-  // worker, checked and applied by complete_jobs().
-  command_hooks(
-      0xFBF4,
-      [this](std::span<const uint8_t>) {
-        writer->submit_load(params->fingerprint());
-        pending.status = cmd::kStatusExecuting;
-        return AbortCode::None;
-      },
-      [this](Object& obj) { finish_command(obj); });
-  for (uint16_t index : {0xFBF0, 0xFBF2, 0xFBF3, 0xFBF4}) {
-    od.find(index)->hooks.before_read = [this](Object&, int) { complete_jobs(); };
-  }
-}
-
 Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_unique<Impl>()) {
   Impl& d = *impl_;
   d.self = this;
@@ -550,7 +366,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.store = std::make_unique<ParameterStore>(d.dir);
   d.writer = std::make_unique<ParameterWriter>(*d.store);
   d.image = std::make_unique<coe::ProcessImage>(d.od);
-  d.install_hooks();
+  attach_device_behaviour(d.config, d.od, d);
   d.history.bind(*d.od.find(coe::diag::kIndex));
   if (options.load_stored_parameters) {
     d.load_stored();
@@ -606,7 +422,7 @@ void Device::foe_poll() {
 bool Device::raise_emergency(uint16_t error_code, uint8_t error_register,
                              std::array<uint8_t, 5> data) {
   const uint16_t text = diag::text_for_emergency(error_code, data);
-  const uint16_t mask = static_cast<uint16_t>(data[3] | (data[4] << 8));
+  const uint16_t mask = le::get16(&data[3]);
   const auto channel = static_cast<uint8_t>(mask ? std::countr_zero(mask) : 0xFF);
   const uint16_t detail = text == diag::text::kEmergency ? error_code : 0;
   bool queued = true;
@@ -630,8 +446,7 @@ const coe::diag::History& Device::diagnosis() const {
 }
 
 void Device::reset_exceptions() {
-  impl_->clear_latched();
-  impl_->notify([&](CycleListener& l) { l.on_exception_reset(*this); });
+  impl_->reset_exceptions();
 }
 
 uint64_t Device::diagnosis_time(bool& local) const {
@@ -733,7 +548,7 @@ void Device::watchdog_expired() {
 }
 
 SyncStatistics& Device::sync_statistics(bool outputs) {
-  return impl_->stats[outputs ? 0 : 1];
+  return impl_->sync_statistics(outputs);
 }
 
 void Device::add_listener(CycleListener* listener) {

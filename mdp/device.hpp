@@ -19,6 +19,7 @@
 #include "coe/access.hpp"
 #include "coe/diagnosis_history.hpp"
 #include "coe/object_dictionary.hpp"
+#include "mdp/device_runtime.hpp"
 #include "mdp/rack_config.hpp"
 
 namespace rackcat::mdp {
@@ -69,14 +70,6 @@ struct DeviceOptions {
 
 // $XDG_STATE_HOME/rackcat, else $HOME/.local/state/rackcat.
 std::string default_state_dir();
-
-// Counters and flags of 0x1C32/0x1C33 the ESC side feeds (ETG.1020 §8 "SyncManager
-// parameter"): the device counts per cycle, the master reads them by SDO.
-struct SyncStatistics {
-  uint16_t sm_event_missed = 0;       // 0x1C3x:0B
-  uint16_t cycle_time_too_small = 0;  // 0x1C3x:0C
-  bool sync_error = false;            // 0x1C3x:20
-};
 
 class Device {
  public:

@@ -17,4 +17,12 @@ void build_object_dictionary(const RackConfig& config, coe::ObjectDictionary& od
   add_diagnosis_objects(config, od);
 }
 
+void attach_device_behaviour(const RackConfig&, coe::ObjectDictionary& od, DeviceRuntime& device) {
+  attach_communication_behaviour(od, device);
+  attach_device_info_behaviour(od, device);
+  attach_mdp_behaviour(od, device);
+  attach_cdp_behaviour(od, device);
+  attach_command_behaviour(od, device);
+}
+
 }  // namespace rackcat::mdp

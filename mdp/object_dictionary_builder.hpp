@@ -5,7 +5,8 @@
 //
 // Validation hooks installed here capture `od` by reference: build into the dictionary that
 // will be used and do not move it afterwards. Behaviour that needs the running device (command
-// objects, clock, counters) is attached by mdp::Device on top.
+// objects, clock, counters) is declared next to the objects, in the same file
+// (attach_*_behaviour), and attached by mdp::Device through the DeviceRuntime interface.
 #pragma once
 
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "coe/object_dictionary.hpp"
+#include "mdp/device_runtime.hpp"
 #include "mdp/rack_config.hpp"
 
 namespace rackcat::mdp {
@@ -35,6 +37,28 @@ void add_exception_objects(const RackConfig& config, coe::ObjectDictionary& od);
 void add_cdp_objects(const RackConfig& config, coe::ObjectDictionary& od);        // 0xF6F0-0xF9F8
 void add_command_objects(const RackConfig& config, coe::ObjectDictionary& od);    // 0xFBF0-0xFBF4
 void add_diagnosis_objects(const RackConfig& config, coe::ObjectDictionary& od);  // 0x10F3, 0x1BFF
+
+// What the objects do in a running device (mdp/device_runtime.hpp), each in the file of its
+// objects: attach_device_behaviour runs them all.
+void attach_device_behaviour(const RackConfig& config, coe::ObjectDictionary& od,
+                             DeviceRuntime& device);
+void attach_communication_behaviour(coe::ObjectDictionary& od,
+                                    DeviceRuntime& device);  // 0x1C12/13/32/33, user PDOs
+void attach_device_info_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device);  // 0x2000
+void attach_mdp_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device);          // 0xF002
+void attach_cdp_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device);          // 0xF9F6
+void attach_command_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device);      // 0xFBF0-4
+
+// A command object's job has finished: status (subindex 2) and response (subindex 3: status,
+// 0, response bytes).
+void complete_command(coe::ObjectDictionary& od, uint16_t index, uint8_t status,
+                      std::span<const uint8_t> response = {});
+// Subindex 1 of a command object back to its read value (the capability bytes, or zeros), so
+// the image never holds a command sequence and a complete-access write-back executes nothing.
+void restore_command(coe::Object& obj);
+// 0xFBF1: the latched exception objects 0xF390..0xF398 and the latched bits 31..2 of
+// 0x2rr1:08 cleared (guide §3.3).
+void clear_latched_exceptions(const RackConfig& config, coe::ObjectDictionary& od);
 
 // 0x10F3 diagnosis history size (ETG.1020 ch. 13 allows 1..250) and the device-level TxPDO
 // that maps 0x10F3:04 "New Messages Available".

@@ -2,6 +2,7 @@
 // 0xF6F0/0xF6F2 (per module) and the device information objects 0xF9F0..0xF9F8. Live values
 // (time since power on, latch times) are filled in by mdp::Device.
 #include <algorithm>
+#include <chrono>
 
 #include "mdp/object_dictionary_builder.hpp"
 #include "mdp/od_helpers.hpp"
@@ -53,6 +54,16 @@ void add_cdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
   od.add(var(0xF9F8, "Firmware Update Functional Generation Number",
              num(0, "Firmware Update Functional Generation Number", DataType::Unsigned32, acc("ro"),
                  0x01)));
+}
+
+void attach_cdp_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device) {
+  // 0xF9F6 Time since power on, in seconds.
+  od.find(0xF9F6)->hooks.before_read = [&device](Object& obj, int) {
+    obj.set_u(0,
+              static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::seconds>(
+                                        std::chrono::steady_clock::now() - device.power_on_time())
+                                        .count()));
+  };
 }
 
 }  // namespace rackcat::mdp

@@ -264,4 +264,30 @@ void add_communication_objects(const RackConfig& cfg, coe::ObjectDictionary& od)
   od.add(sync_parameter_object(false));
 }
 
+void attach_communication_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device) {
+  // 0x1C12/0x1C13: a new assignment recompiles the process image (mailbox path, PREOP only).
+  // The user PDOs likewise: a new mapping of an assigned PDO changes the SM2/SM3 sizes the ESM
+  // checks on PREOP->SAFEOP.
+  for (uint16_t index : {uint16_t{0x1C12}, uint16_t{0x1C13}, sm::kUserRxPdo, sm::kUserTxPdo}) {
+    od.find(index)->hooks.after_write = [&device](Object&, int) {
+      device.recompile_process_image();
+    };
+  }
+  // 0x1C32/0x1C33: counters from the cyclic path; Get Cycle Time = 2 resets them.
+  for (const bool outputs : {true, false}) {
+    Object* o = od.find(outputs ? 0x1C32 : 0x1C33);
+    o->hooks.before_read = [&device, outputs](Object& obj, int) {
+      const SyncStatistics& s = device.sync_statistics(outputs);
+      obj.set_u(0x0B, s.sm_event_missed);
+      obj.set_u(0x0C, s.cycle_time_too_small);
+      obj.set_u(0x20, s.sync_error ? 1 : 0);
+    };
+    o->hooks.after_write = [&device, outputs](Object& obj, int subindex) {
+      if ((subindex == 0x08 || subindex == -1) && obj.get_u(0x08) == 2) {
+        device.sync_statistics(outputs) = SyncStatistics{};
+      }
+    };
+  }
+}
+
 }  // namespace rackcat::mdp

@@ -3,6 +3,9 @@
 // 0x3nn1 Module Information (§2.4 Table 6).
 #include <algorithm>
 #include <array>
+#include <cstdio>
+#include <ctime>
+#include <string>
 
 #include "mdp/card_catalogue.hpp"
 #include "mdp/object_dictionary_builder.hpp"
@@ -13,6 +16,16 @@ namespace {
 
 using namespace detail;
 using coe::AbortCode;
+
+// Seconds of a "YYYY-MM-DD HH:MM:SS" text (UTC), already validated.
+int64_t parse_clock(std::string_view s) {
+  std::tm tm{};
+  std::sscanf(std::string(s).c_str(), "%d-%d-%d %d:%d:%d", &tm.tm_year, &tm.tm_mon, &tm.tm_mday,
+              &tm.tm_hour, &tm.tm_min, &tm.tm_sec);
+  tm.tm_year -= 1900;
+  tm.tm_mon -= 1;
+  return static_cast<int64_t>(timegm(&tm));
+}
 
 // Fans without a measurement read -100 % deviation and 0 RPM (guide Table 2); fitted fans
 // start at their nominal speed.
@@ -128,6 +141,27 @@ void add_device_info_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
   }
   od.add(std::move(map));
   for (const auto& m : cfg.modules) od.add(module_information(m));
+}
+
+void attach_device_info_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device) {
+  // 0x2000:08 Clock: the system clock plus the offset last written (not kept over a reset).
+  Object* o = od.find(0x2000);
+  if (o == nullptr) return;
+  o->hooks.before_read = [&device](Object& obj, int subindex) {
+    if (subindex != 0x08 && subindex != -1) return;
+    const std::time_t t = std::time(nullptr) + device.clock_offset_s();
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char buf[80];
+    std::snprintf(buf, sizeof buf, "%04d-%02d-%02d %02d:%02d:%02d", tm.tm_year + 1900,
+                  tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
+    obj.set_string(0x08, buf);
+  };
+  o->hooks.after_write = [&device](Object& obj, int subindex) {
+    if (subindex != 0x08 && subindex != -1) return;
+    const std::string text = obj.get_string(0x08);
+    if (is_valid_clock(text)) device.set_clock_offset_s(parse_clock(text) - std::time(nullptr));
+  };
 }
 
 }  // namespace rackcat::mdp

@@ -8,7 +8,8 @@
 // Appendix A say 0xF3x6/0xF3x8; ETG.5003.1 assigns x6/x8 to the global manufacturer details, so
 // 0xF386/0xF388 it is. 0xF3x5/0xF3x7 (global device details) are not implemented, as §3.4 says,
 // and Appendix A lists no 0xF3A0. Values are maintained by modules/ (propagation, guide §3);
-// 0xFBF1 clears the latched objects (mdp::Device).
+// 0xFBF1 clears the latched objects (clear_latched_exceptions below).
+#include "mdp/card_catalogue.hpp"
 #include "mdp/object_dictionary_builder.hpp"
 #include "mdp/od_helpers.hpp"
 
@@ -65,6 +66,20 @@ void add_exception_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
   od.add(per_module(0xF3A4, "Manufacturer Error Mask", n, mask, 0xFFFFFFFF));
   od.add(global(0xF3A6, "Global Manufacturer Warning Mask", mask, 0xFFFFFFFF));
   od.add(global(0xF3A8, "Global Manufacturer Error Mask", mask, 0xFFFFFFFF));
+}
+
+void clear_latched_exceptions(const RackConfig& config, coe::ObjectDictionary& od) {
+  for (uint16_t index : {0xF390, 0xF391, 0xF392, 0xF393, 0xF394, 0xF396, 0xF398}) {
+    if (Object* o = od.find(index)) {
+      for (const auto& e : o->entries()) {
+        if (e.subindex > 0 || o->code() == coe::ObjectCode::Var) o->set_u(e.subindex, 0);
+      }
+    }
+  }
+  // 0x2rr1:08 bits 31..2 are latched, bits 1..0 the live RIM state (guide §3.3).
+  for (const auto& r : config.rims) {
+    if (Object* o = od.find(rim_info_index(r.number))) o->set_u(0x08, o->get_u(0x08) & 0x3);
+  }
 }
 
 }  // namespace rackcat::mdp

@@ -120,4 +120,17 @@ void add_mdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
                     static_cast<uint8_t>(cfg.modules.size()), acc("ro")));
 }
 
+void attach_mdp_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device) {
+  // 0xF002 Detect Modules: the detected list becomes the configured rack, then drivers remove
+  // what is offline (modules/, Detect Modules Override).
+  od.find(0xF002)->hooks.after_write = [&device](Object& obj, int) {
+    const auto c = obj.bytes(1);
+    if (!std::equal(c.begin(), c.end(), cmd::kScan.begin(), cmd::kScan.end())) return;
+    // Every configured module; the rack then narrows it to what it detects (guide Table 23).
+    device.detect_modules();
+    obj.set_u(2, cmd::kStatusScanComplete);
+    restore_command(obj);
+  };
+}
+
 }  // namespace rackcat::mdp
