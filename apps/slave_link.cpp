@@ -1,5 +1,6 @@
 #include "apps/slave_link.hpp"
 
+#include "base/little_endian.hpp"
 #include "ecat/al_status_code.hpp"
 #include "ecat/registers.hpp"
 
@@ -7,7 +8,7 @@ namespace rackcat::apps {
 namespace {
 
 uint16_t u16(std::span<const uint8_t> m, size_t at) {
-  return at + 1 < m.size() ? static_cast<uint16_t>(m[at] | m[at + 1] << 8) : 0;
+  return at + 1 < m.size() ? le::get16(&m[at]) : 0;
 }
 uint32_t u32(std::span<const uint8_t> m, size_t at) {
   return static_cast<uint32_t>(u16(m, at)) | static_cast<uint32_t>(u16(m, at + 2)) << 16;

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "base/little_endian.hpp"
+
 namespace rackcat::coe::diag {
 
 bool Message::add(uint16_t type, uint32_t value, uint8_t size) {
@@ -44,7 +46,7 @@ size_t parameter_size(uint16_t flag) {
 uint32_t Message::parameter(size_t n) const {
   size_t pos = 0;
   for (size_t i = 0; i < parameter_count && pos + 2 <= parameter_bytes; ++i) {
-    const auto flag = static_cast<uint16_t>(parameters[pos] | (parameters[pos + 1] << 8));
+    const auto flag = le::get16(&parameters[pos]);
     const size_t size = parameter_size(flag);
     if (size == 0 || pos + 2 + size > parameter_bytes) return 0;
     if (i == n) {
@@ -80,7 +82,7 @@ std::optional<Message> decode(std::span<const uint8_t> slot) {
   uint8_t count = 0;
   for (unsigned i = 0; i < (flags >> 8); ++i) {
     if (pos + 2 > avail) break;
-    const auto flag = static_cast<uint16_t>(slot[16 + pos] | (slot[17 + pos] << 8));
+    const auto flag = le::get16(&slot[16 + pos]);
     const size_t size = parameter_size(flag);
     if (size == 0 || pos + 2 + size > avail) break;
     pos += 2 + size;
@@ -150,7 +152,7 @@ void History::bind(Object& object) {
     };
     if (subindex == 5 || subindex == -1) {
       const auto b = at(5);
-      const uint16_t v = static_cast<uint16_t>(b[0] | (b[1] << 8));
+      const uint16_t v = le::get16(&b[0]);
       // Bit 5 is read only: a write-back of what was read is not an error.
       if (v & ~(kFlagsWritable | kFlagOverflow)) return AbortCode::ValueRange;
     }

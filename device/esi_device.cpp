@@ -13,6 +13,7 @@
 #include <pugixml.hpp>
 #include <set>
 
+#include "base/little_endian.hpp"
 #include "coe/access.hpp"
 #include "coe/data_type.hpp"
 #include "device/esi_error.hpp"
@@ -286,9 +287,7 @@ class Reader {
       if (ec != std::errc{} || p != hex.data() + i + 2) fail(cd, "<ConfigData> is not hex bytes");
       b.push_back(static_cast<uint8_t>(v));
     }
-    auto w = [&](size_t i) -> uint16_t {
-      return i * 2 + 1 < b.size() ? static_cast<uint16_t>(b[2 * i] | (b[2 * i + 1] << 8)) : 0;
-    };
+    auto w = [&](size_t i) -> uint16_t { return i * 2 + 1 < b.size() ? le::get16(&b[2 * i]) : 0; };
     c.pdi_control = w(0);
     c.pdi_config = w(1);
     c.sync_impulse_length = w(2);

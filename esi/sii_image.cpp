@@ -4,11 +4,18 @@
 #include <map>
 #include <string>
 
-#include "esi/little_endian.hpp"
+#include "base/little_endian.hpp"
 #include "esi/sii_crc.hpp"
 
 namespace rackcat::esi {
 namespace {
+
+// Appends to the image being built: room for `n` bytes at its end, written by rackcat::le
+// (ETG.2010 §2: words little-endian).
+uint8_t* grow(std::vector<uint8_t>& out, size_t n) {
+  out.resize(out.size() + n);
+  return &out[out.size() - n];
+}
 
 // The Strings category (ETG.2010 §2.3): one count byte, then length-prefixed strings numbered
 // from 1. Index 0 means "no string". Names repeat a lot across modules ("Input 1"), so equal
@@ -28,9 +35,9 @@ class StringTable {
   }
   std::vector<uint8_t> encode() const {
     std::vector<uint8_t> out;
-    le::put8(out, static_cast<uint8_t>(texts_.size()));
+    out.push_back(static_cast<uint8_t>(texts_.size()));
     for (const auto& t : texts_) {
-      le::put8(out, static_cast<uint8_t>(t.size()));
+      out.push_back(static_cast<uint8_t>(t.size()));
       out.insert(out.end(), t.begin(), t.end());
     }
     return out;
@@ -47,8 +54,8 @@ void append_category(std::vector<uint8_t>& image, uint16_t type, std::vector<uin
     throw SiiEncodeError("SII category " + std::to_string(type) + " needs " +
                          std::to_string(data.size() / 2) + " words, more than 65535");
   }
-  le::put16(image, type);
-  le::put16(image, static_cast<uint16_t>(data.size() / 2));
+  le::put16(grow(image, 2), type);
+  le::put16(grow(image, 2), static_cast<uint16_t>(data.size() / 2));
   image.insert(image.end(), data.begin(), data.end());
 }
 
@@ -77,17 +84,17 @@ std::vector<uint8_t> encode_general(const DeviceDescription& d, StringTable& str
   g[9] = 0;   // DS402 channels
   g[10] = 0;  // SysmanClass
   g[11] = 0;  // Flags: SafeOp/NotLRW/MBoxDataLinkLayer/IdentALSts/IdentPhyM all off
-  le::store16(g, 12, static_cast<uint16_t>(d.ebus_current_ma));
+  le::put16(&g[12], static_cast<uint16_t>(d.ebus_current_ma));
   g[14] = g[0];  // GroupIdx repeated for compatibility
-  le::store16(g, 16, d.physical_ports);
-  le::store16(g, 18, 0);  // physical memory address of the identification value
+  le::put16(&g[16], d.physical_ports);
+  le::put16(&g[18], 0);  // physical memory address of the identification value
   return g;
 }
 
 std::vector<uint8_t> encode_fmmus(const DeviceDescription& d) {
   std::vector<uint8_t> out;
-  for (auto f : d.fmmus) le::put8(out, static_cast<uint8_t>(f));
-  if (out.size() % 2) le::put8(out, static_cast<uint8_t>(FmmuUsage::Unused));
+  for (auto f : d.fmmus) out.push_back(static_cast<uint8_t>(f));
+  if (out.size() % 2) out.push_back(static_cast<uint8_t>(FmmuUsage::Unused));
   return out;
 }
 
@@ -95,12 +102,12 @@ std::vector<uint8_t> encode_fmmus(const DeviceDescription& d) {
 std::vector<uint8_t> encode_sms(const DeviceDescription& d) {
   std::vector<uint8_t> out;
   for (const auto& sm : d.sms) {
-    le::put16(out, sm.start);
-    le::put16(out, sm.default_size);
-    le::put8(out, sm.control);
-    le::put8(out, 0);  // status register: don't care
-    le::put8(out, sm.enable ? 0x01 : 0x00);
-    le::put8(out, static_cast<uint8_t>(sm.type));
+    le::put16(grow(out, 2), sm.start);
+    le::put16(grow(out, 2), sm.default_size);
+    out.push_back(sm.control);
+    out.push_back(0);  // status register: don't care
+    out.push_back(sm.enable ? 0x01 : 0x00);
+    out.push_back(static_cast<uint8_t>(sm.type));
   }
   return out;
 }
@@ -129,22 +136,22 @@ std::vector<uint8_t> encode_pdos(const std::vector<PdoDescription>& pdos, String
     if (p.entries.size() > 255) {
       throw SiiEncodeError("PDO " + std::to_string(p.index) + " has more than 255 entries");
     }
-    le::put16(out, p.index);
-    le::put8(out, static_cast<uint8_t>(p.entries.size()));
-    le::put8(out, p.sm);
-    le::put8(out, 0);  // Synchronization: not used
-    le::put8(out, strings.intern(p.name));
+    le::put16(grow(out, 2), p.index);
+    out.push_back(static_cast<uint8_t>(p.entries.size()));
+    out.push_back(p.sm);
+    out.push_back(0);  // Synchronization: not used
+    out.push_back(strings.intern(p.name));
     uint16_t flags = sii::kPdoDefault;
     if (p.mandatory) flags |= sii::kPdoMandatory;
     if (p.fixed) flags |= sii::kPdoFixedContent;
-    le::put16(out, flags);
+    le::put16(grow(out, 2), flags);
     for (const auto& e : p.entries) {
-      le::put16(out, e.index);
-      le::put8(out, e.subindex);
-      le::put8(out, e.index == 0 ? 0 : strings.intern(e.name));
-      le::put8(out, e.index == 0 ? 0 : entry_type_byte(e));
-      le::put8(out, e.bit_length);
-      le::put16(out, 0);  // flags: reserved
+      le::put16(grow(out, 2), e.index);
+      out.push_back(e.subindex);
+      out.push_back(e.index == 0 ? 0 : strings.intern(e.name));
+      out.push_back(e.index == 0 ? 0 : entry_type_byte(e));
+      out.push_back(e.bit_length);
+      le::put16(grow(out, 2), 0);  // flags: reserved
     }
   }
   return out;
@@ -154,15 +161,15 @@ std::vector<uint8_t> encode_pdos(const std::vector<PdoDescription>& pdos, String
 std::vector<uint8_t> encode_dc(const DeviceDescription& d, StringTable& strings) {
   std::vector<uint8_t> out;
   for (const auto& m : d.dc_modes) {
-    le::put32(out, m.cycle_time_sync0);
-    le::put32(out, static_cast<uint32_t>(m.shift_time_sync0));
-    le::put32(out, static_cast<uint32_t>(m.shift_time_sync1));
-    le::put16(out, static_cast<uint16_t>(m.cycle_time_sync1_factor));
-    le::put16(out, m.assign_activate);
-    le::put16(out, static_cast<uint16_t>(m.cycle_time_sync0_factor));
-    le::put8(out, strings.intern(m.name));
-    le::put8(out, strings.intern(m.description));
-    le::put32(out, 0);  // reserved
+    le::put32(grow(out, 4), m.cycle_time_sync0);
+    le::put32(grow(out, 4), static_cast<uint32_t>(m.shift_time_sync0));
+    le::put32(grow(out, 4), static_cast<uint32_t>(m.shift_time_sync1));
+    le::put16(grow(out, 2), static_cast<uint16_t>(m.cycle_time_sync1_factor));
+    le::put16(grow(out, 2), m.assign_activate);
+    le::put16(grow(out, 2), static_cast<uint16_t>(m.cycle_time_sync0_factor));
+    out.push_back(strings.intern(m.name));
+    out.push_back(strings.intern(m.description));
+    le::put32(grow(out, 4), 0);  // reserved
   }
   return out;
 }
@@ -178,15 +185,15 @@ const SyncManagerDescription* find_sm(const DeviceDescription& d, SmType type) {
 std::vector<uint8_t> encode_config_area(const EscConfigArea& c) {
   std::vector<uint8_t> out;
   out.reserve(16);
-  le::put16(out, c.pdi_control);
-  le::put16(out, c.pdi_config);
-  le::put16(out, c.sync_impulse_length);
-  le::put16(out, c.extended_pdi_config);
-  le::put16(out, c.station_alias);
-  le::put16(out, 0);  // reserved
-  le::put16(out, 0);  // reserved
+  le::put16(grow(out, 2), c.pdi_control);
+  le::put16(grow(out, 2), c.pdi_config);
+  le::put16(grow(out, 2), c.sync_impulse_length);
+  le::put16(grow(out, 2), c.extended_pdi_config);
+  le::put16(grow(out, 2), c.station_alias);
+  le::put16(grow(out, 2), 0);  // reserved
+  le::put16(grow(out, 2), 0);  // reserved
   // Word 7: CRC in the low byte, high byte 0 (ETG.2010 Table 2).
-  le::put16(out, sii_crc8(std::span<const uint8_t>(out.data(), 14)));
+  le::put16(grow(out, 2), sii_crc8(std::span<const uint8_t>(out.data(), 14)));
   return out;
 }
 
@@ -194,8 +201,8 @@ SiiImage encode_sii(const DeviceDescription& d) {
   std::vector<uint8_t> image = encode_config_area(d.config);
   image.resize(sii::kFirstCategory * 2u, 0);
 
-  auto word = [&](uint16_t address, uint16_t value) { le::store16(image, 2u * address, value); };
-  auto dword = [&](uint16_t address, uint32_t value) { le::store32(image, 2u * address, value); };
+  auto word = [&](uint16_t address, uint16_t value) { le::put16(&image[2u * address], value); };
+  auto dword = [&](uint16_t address, uint32_t value) { le::put32(&image[2u * address], value); };
   dword(sii::kVendorId, d.vendor_id);
   dword(sii::kProductCode, d.product_code);
   dword(sii::kRevision, d.revision);
@@ -240,7 +247,7 @@ SiiImage encode_sii(const DeviceDescription& d) {
   append_category(image, sii::kCatStrings, strings.encode());
   if (!txpdo.empty()) append_category(image, sii::kCatTxPdo, std::move(txpdo));
   if (!rxpdo.empty()) append_category(image, sii::kCatRxPdo, std::move(rxpdo));
-  le::put16(image, sii::kCatEnd);
+  le::put16(grow(image, 2), sii::kCatEnd);
 
   if (image.size() > sii::kMaxBytes) {
     throw SiiEncodeError("SII image needs " + std::to_string(image.size()) +

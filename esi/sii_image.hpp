@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "base/little_endian.hpp"
 #include "esi/device_description.hpp"
 
 namespace rackcat::esi {
@@ -84,9 +85,7 @@ struct SiiImage {
 
   std::span<const uint8_t> span() const { return bytes; }
   size_t word_count() const { return bytes.size() / 2; }
-  uint16_t word(uint16_t address) const {
-    return static_cast<uint16_t>(bytes[2u * address] | (bytes[2u * address + 1] << 8));
-  }
+  uint16_t word(uint16_t address) const { return le::get16(&bytes[2u * address]); }
 };
 
 class SiiEncodeError : public std::runtime_error {

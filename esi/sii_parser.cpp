@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "esi/little_endian.hpp"
+#include "base/little_endian.hpp"
 #include "esi/sii_crc.hpp"
 #include "esi/sii_image.hpp"
 
@@ -73,9 +73,9 @@ void parse_general(Bytes body, uint16_t at, SiiInfo& info) {
   g.ds402_channels = body[9];
   g.sysman_class = body[10];
   g.flags = body[11];
-  g.ebus_current_ma = static_cast<int16_t>(le::get16(body, 12));
-  g.physical_ports = le::get16(body, 16);
-  g.physical_memory_address = le::get16(body, 18);
+  g.ebus_current_ma = static_cast<int16_t>(le::get16(&body[12]));
+  g.physical_ports = le::get16(&body[16]);
+  g.physical_memory_address = le::get16(&body[18]);
   info.has_general = true;
 }
 
@@ -86,8 +86,8 @@ void parse_sms(Bytes body, uint16_t at, SiiInfo& info) {
   }
   for (size_t pos = 0; pos < body.size(); pos += 8) {
     SiiSyncManager sm;
-    sm.start = le::get16(body, pos);
-    sm.length = le::get16(body, pos + 2);
+    sm.start = le::get16(&body[pos]);
+    sm.length = le::get16(&body[pos + 2]);
     sm.control = body[pos + 4];
     sm.status = body[pos + 5];
     sm.enable = body[pos + 6];
@@ -101,12 +101,12 @@ void parse_pdos(Bytes body, uint16_t at, uint16_t type, std::vector<SiiPdo>& out
   // A category is padded to whole words; fewer than 8 bytes left cannot start a PDO.
   while (pos + 8 <= body.size()) {
     SiiPdo p;
-    p.index = le::get16(body, pos);
+    p.index = le::get16(&body[pos]);
     size_t n = body[pos + 2];
     p.sm = body[pos + 3];
     p.synchronization = body[pos + 4];
     p.name_idx = body[pos + 5];
-    p.flags = le::get16(body, pos + 6);
+    p.flags = le::get16(&body[pos + 6]);
     pos += 8;
     if (pos + 8 * n > body.size()) {
       fail(
@@ -116,12 +116,12 @@ void parse_pdos(Bytes body, uint16_t at, uint16_t type, std::vector<SiiPdo>& out
     }
     for (size_t i = 0; i < n; ++i, pos += 8) {
       SiiPdoEntry e;
-      e.index = le::get16(body, pos);
+      e.index = le::get16(&body[pos]);
       e.subindex = body[pos + 2];
       e.name_idx = body[pos + 3];
       e.data_type = body[pos + 4];
       e.bit_length = body[pos + 5];
-      e.flags = le::get16(body, pos + 6);
+      e.flags = le::get16(&body[pos + 6]);
       p.entries.push_back(e);
     }
     out.push_back(std::move(p));
@@ -139,12 +139,12 @@ void parse_dc(Bytes body, uint16_t at, SiiInfo& info) {
   }
   for (size_t pos = 0; pos < body.size(); pos += 24) {
     SiiDcMode m;
-    m.cycle_time_sync0 = le::get32(body, pos);
-    m.shift_time_sync0 = static_cast<int32_t>(le::get32(body, pos + 4));
-    m.shift_time_sync1 = static_cast<int32_t>(le::get32(body, pos + 8));
-    m.cycle_time_sync1_factor = static_cast<int16_t>(le::get16(body, pos + 12));
-    m.assign_activate = le::get16(body, pos + 14);
-    m.cycle_time_sync0_factor = static_cast<int16_t>(le::get16(body, pos + 16));
+    m.cycle_time_sync0 = le::get32(&body[pos]);
+    m.shift_time_sync0 = static_cast<int32_t>(le::get32(&body[pos + 4]));
+    m.shift_time_sync1 = static_cast<int32_t>(le::get32(&body[pos + 8]));
+    m.cycle_time_sync1_factor = static_cast<int16_t>(le::get16(&body[pos + 12]));
+    m.assign_activate = le::get16(&body[pos + 14]);
+    m.cycle_time_sync0_factor = static_cast<int16_t>(le::get16(&body[pos + 16]));
     m.name_idx = body[pos + 18];
     m.description_idx = body[pos + 19];
     info.dc_modes.push_back(m);
@@ -172,8 +172,8 @@ SiiInfo parse_sii(std::span<const uint8_t> image) {
                      kHeaderBytes));
   }
   SiiInfo info;
-  auto w = [&](uint16_t address) { return le::get16(image, 2u * address); };
-  auto dw = [&](uint16_t address) { return le::get32(image, 2u * address); };
+  auto w = [&](uint16_t address) { return le::get16(&image[2u * address]); };
+  auto dw = [&](uint16_t address) { return le::get32(&image[2u * address]); };
   info.pdi_control = w(sii::kPdiControl);
   info.pdi_config = w(sii::kPdiConfig);
   info.sync_impulse_length = w(sii::kSyncImpulseLength);

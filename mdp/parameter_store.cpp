@@ -6,20 +6,22 @@
 
 #include <cstring>
 
+#include "base/little_endian.hpp"
+
 namespace rackcat::mdp {
 namespace {
+
+// Appends to the image being built: room for `n` bytes at its end, written by rackcat::le
+// (ETG.2010 §2: words little-endian).
+uint8_t* grow(std::vector<uint8_t>& out, size_t n) {
+  out.resize(out.size() + n);
+  return &out[out.size() - n];
+}
 
 constexpr char kMagic[8] = {'R', 'A', 'C', 'K', 'C', 'A', 'T', 'P'};
 constexpr uint32_t kVersion = 1;
 constexpr size_t kHeader = 8 + 4 + 4 + 4;
 
-void put32(std::vector<uint8_t>& out, uint32_t v) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
-}
-uint32_t get32(const uint8_t* p) {
-  return static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) |
-         (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
-}
 uint32_t crc32_of(const uint8_t* data, size_t n) {
   return static_cast<uint32_t>(::crc32(::crc32(0L, Z_NULL, 0), data, static_cast<uInt>(n)));
 }
@@ -33,11 +35,11 @@ ParameterStore::ParameterStore(const std::string& dir) : dir_(StateDirectory::op
 std::vector<uint8_t> ParameterStore::encode(uint32_t fingerprint,
                                             std::span<const uint8_t> payload) {
   std::vector<uint8_t> out(kMagic, kMagic + 8);
-  put32(out, kVersion);
-  put32(out, fingerprint);
-  put32(out, static_cast<uint32_t>(payload.size()));
+  le::put32(grow(out, 4), kVersion);
+  le::put32(grow(out, 4), fingerprint);
+  le::put32(grow(out, 4), static_cast<uint32_t>(payload.size()));
   out.insert(out.end(), payload.begin(), payload.end());
-  put32(out, crc32_of(out.data(), out.size()));
+  le::put32(grow(out, 4), crc32_of(out.data(), out.size()));
   return out;
 }
 
@@ -71,17 +73,17 @@ ParameterStore::LoadResult ParameterStore::decode(std::span<const uint8_t> bytes
     detail = "ignored foreign parameter file " + source + ": not a rackcat parameter file";
     return LoadResult::Foreign;
   }
-  const uint32_t length = get32(&bytes[16]);
+  const uint32_t length = le::get32(&bytes[16]);
   if (bytes.size() != kHeader + static_cast<size_t>(length) + 4) {
     detail = "ignored corrupt parameter file " + source + ": length " +
              std::to_string(bytes.size()) + " does not match its header";
     return LoadResult::Corrupt;
   }
-  if (crc32_of(bytes.data(), kHeader + length) != get32(&bytes[kHeader + length])) {
+  if (crc32_of(bytes.data(), kHeader + length) != le::get32(&bytes[kHeader + length])) {
     detail = "ignored corrupt parameter file " + source + ": checksum mismatch";
     return LoadResult::Corrupt;
   }
-  if (get32(&bytes[8]) != kVersion || get32(&bytes[12]) != fingerprint) {
+  if (le::get32(&bytes[8]) != kVersion || le::get32(&bytes[12]) != fingerprint) {
     detail = "ignored foreign parameter file " + source +
              ": written for another rack configuration or format";
     return LoadResult::Foreign;

@@ -2,8 +2,8 @@
 // that names the problem.
 #include <gtest/gtest.h>
 
+#include "base/little_endian.hpp"
 #include "esi/describe_dictionary.hpp"
-#include "esi/little_endian.hpp"
 #include "esi/sii_image.hpp"
 #include "esi/sii_parser.hpp"
 #include "tests/esi/sample_dictionary.hpp"
@@ -84,7 +84,7 @@ TEST(SiiParser, WrongCrcIsReported) {
 TEST(SiiParser, CategoryRunningPastTheEndIsReported) {
   auto img = encode_sii(sample_description());
   // Declare the General category (first, at word 0x40) longer than the whole image.
-  le::store16(img.bytes, 2 * 0x41, static_cast<uint16_t>(img.bytes.size()));
+  le::put16(&img.bytes[2 * 0x41], static_cast<uint16_t>(img.bytes.size()));
   auto msg = parse_error(img.span());
   EXPECT_NE(msg.find("General category"), std::string::npos) << msg;
   EXPECT_NE(msg.find("runs past the end"), std::string::npos) << msg;

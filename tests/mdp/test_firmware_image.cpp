@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "base/little_endian.hpp"
 #include "mdp/file_access.hpp"
 #include "mdp/firmware_image.hpp"
 #include "mdp/firmware_store.hpp"
@@ -31,7 +32,7 @@ Bytes pack_abc() {
 }
 
 uint32_t le32(const Bytes& b, size_t at) {
-  return b[at] | (b[at + 1] << 8) | (b[at + 2] << 16) | (static_cast<uint32_t>(b[at + 3]) << 24);
+  return le::get32(&b[at]);
 }
 
 void fix_header_crc(Bytes& f) {

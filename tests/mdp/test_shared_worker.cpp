@@ -1,5 +1,5 @@
-// The devices of one process share one background worker for their file commands (issue 16:
-// the thread count does not grow with the slave count): 32 devices, each storing its own
+// The devices of one process share one background worker for their file commands (the
+// thread count does not grow with the slave count): 32 devices, each storing its own
 // parameters at once, use at most one thread besides the test's, and every store lands in its
 // own device's file in submission order per device.
 #include <gtest/gtest.h>
