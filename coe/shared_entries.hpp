@@ -1,4 +1,4 @@
-// Entry descriptions shared between objects with identical descriptions (issue 16: per-slave
+// Entry descriptions shared between objects with identical descriptions (per-slave
 // memory proportional to what the slave uses). 256 identical slaves build 256 dictionaries
 // whose objects describe their entries identically (names, types, bit layout, access, limits,
 // defaults, ETG.1000.6 §5.6.3.6 entry descriptions); only the value images differ per slave.

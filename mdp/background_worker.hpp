@@ -1,7 +1,7 @@
 // One worker thread shared by every device of the process for their slow file work (0xFBF0
 // reset, 0xFBF2 store, 0xFBF3 checksum, 0xFBF4 load; see parameter_writer.hpp). A process with
-// 256 slaves has one such thread, not 256: the thread count does not grow with the slave count
-// (issue 16). The thread starts with the first job, so a process that never stores has none
+// 256 slaves has one such thread, not 256: the thread count does not grow with the slave count.
+// The thread starts with the first job, so a process that never stores has none
 // (and ecat::drop_privileges, which refuses a multi-threaded process, is unaffected).
 //
 // A client (a ParameterWriter) schedules itself when it has queued work; the worker calls its

@@ -158,7 +158,7 @@ const std::array<CardType, 26> kCards{{
      0x0064D816, 16, 0.0f, 5.0f, DI, Signal::DigitalIn, 8, 0, IoKind::DinX16x8, kNone, kNoSafe,
      false, false, false},
     // Not a Fusion.IO card: an absolute multi-turn rotary encoder interface after the encoder
-    // guide (../shared/reference/profinet-absolute-encoder-user-guide.txt). Card ID 0xF300 and
+    // guide (the PROFINET absolute encoder user guide). Card ID 0xF300 and
     // ident family 0xE are rackcat's; the voltage range is the encoder's supply, guide
     // "Connector power supply" US 10 - 30 V DC. One channel: the shaft.
     {0xF300, "CAE-10", "Abs encoder 16+12 bit", "Absolute Rotary Encoder Interface", 0x0064E001, 1,

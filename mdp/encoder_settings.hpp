@@ -1,5 +1,5 @@
 // Settings of the absolute rotary encoder card (CAE-10) after the encoder guide
-// (../shared/reference/profinet-absolute-encoder-user-guide.txt, "the guide"): the hardware
+// (the PROFINET absolute encoder user guide, "the guide"): the hardware
 // (single-turn steps, distinguishable turns), the parameters of "Parameter for Acyclic Data
 // Transmission" as CoE entries of 0x8nn0, and the rules the guide gives for their combination.
 // The object layout and the mapping to the guide's parameters are in docs/ENCODER.md.

@@ -12,7 +12,7 @@
 // snapshot is the one that ends up on disk).
 //
 // The work runs on the process-wide BackgroundWorker (one thread for all devices, started with
-// the first job), not on a thread per device (issue 16).
+// the first job), not on a thread per device: the thread count does not grow with the slaves.
 #pragma once
 
 #include <array>

@@ -1,5 +1,5 @@
-// Substitute values (issue 18), after the INTERBUS Basic profile (../shared/reference
-// interbus-basic-profile-10.txt §7.3.2 "Substitute value behavior", objects 0x0020
+// Substitute values, after the INTERBUS Basic profile (INTERBUS Basic Profile 1.0
+// §7.3.2 "Substitute value behavior", objects 0x0020
 // PDTimeoutCode / 0x0024 ResetCode for outputs, 0x0030 PF_Code and 0x0031 PDIN_Subst for inputs)
 // in the device's manufacturer range next to the guide's safe states 0x4nn0..0x4nn3 (§2.5):
 //

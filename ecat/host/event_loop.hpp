@@ -8,7 +8,7 @@
 // end run() cleanly with status 0. Two wait modes (WaitMode): Blocking sleeps in ppoll() on
 // the socket and an eventfd (post(), stop(), signals) with the next timer deadline as the
 // timeout; BusyPoll spins on non-blocking receives and checks the clock and flags between them.
-// Blocking waits adaptively (issue 16): after a frame it keeps polling without blocking for a
+// Blocking waits adaptively: after a frame it keeps polling without blocking for a
 // short bounded window (Options::spin_after_frame_ns, default 100 µs) before it sleeps again,
 // because masters send mailbox exchanges in bursts (an SDO upload is 5 frames back to back):
 // one wake-up per burst instead of one per frame. With no frames it sleeps (0 % idle CPU); a

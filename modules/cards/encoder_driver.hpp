@@ -1,5 +1,5 @@
 // The absolute rotary encoder card (CAE-10) after the encoder guide
-// (../shared/reference/profinet-absolute-encoder-user-guide.txt, "the guide"): one input
+// (the PROFINET absolute encoder user guide, "the guide"): one input
 // channel whose source is the shaft angle in revolutions (constant, ramp, replay, plant ...);
 // the telegram 0x7nnD (STW2_ENC, G1_STW1) / 0x6nnD (ZSW2_ENC, G1_ZSW1, G1_XIST1, G1_XIST2,
 // NIST_B); settings 0x8nn0, preset 0x8nn1, information 0x9nn0 (docs/ENCODER.md).

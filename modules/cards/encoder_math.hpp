@@ -1,5 +1,5 @@
 // Position, scaling, round-axis, preset and velocity arithmetic of the absolute rotary encoder
-// card, after the encoder guide (../shared/reference/profinet-absolute-encoder-user-guide.txt,
+// card, after the encoder guide (the PROFINET absolute encoder user guide,
 // "the guide"), section numbers as in its function table (3.11.x). Pure functions on integers
 // (no state, no allocation); the card driver (encoder_driver.hpp) keeps the state.
 //

@@ -1,5 +1,5 @@
 // Per-channel diagnosis of the slot cards (ETG.1020 ch. 13 messages; causes after the PROFINET
-// ChannelErrorType of ../shared/reference/profinet-profibus-diagnostic-records.txt): every
+// ChannelErrorType of the PROFINET/PROFIBUS diagnostic records description): every
 // cycle the channel states are compared with what was last reported and each change becomes
 // one 0x10F3 message (and its Emergency) through mdp::Device::report_diagnosis: an "appears"
 // message when a cause becomes active, a "removed" one (class information) when it goes.

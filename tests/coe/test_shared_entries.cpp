@@ -1,5 +1,5 @@
 // Entry descriptions are shared between identically described objects of different
-// dictionaries (coe/shared_entries.hpp, issue 16); values stay per dictionary, and a later
+// dictionaries (coe/shared_entries.hpp); values stay per dictionary, and a later
 // add() to one object never changes another's description.
 #include <gtest/gtest.h>
 

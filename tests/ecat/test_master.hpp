@@ -70,7 +70,7 @@ class TestMaster {
   uint32_t fprd32(uint16_t station, uint16_t ado);
   uint64_t fprd64(uint16_t station, uint16_t ado);
 
-  // SOEM's config_init steps 1-12 (GUIDE.md §1) for every slave: stations 0x1001.., PREOP.
+  // SOEM's config_init steps 1-12  for every slave: stations 0x1001.., PREOP.
   void config_init();
   // SM0/SM1 as the SII says, then PREOP (state + ack); returns the AL status read back.
   uint16_t request_state(uint16_t station, uint8_t state);

@@ -1,4 +1,4 @@
-// SOEM's config_init sequence (GUIDE.md §1, steps 1-12) replayed in process: the slaves end in
+// SOEM's config_init sequence (steps 1-12) replayed in process: the slaves end in
 // PREOP with the addresses, identity and mailbox SMs SOEM expects.
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
-"""[security] The control API under attack while pysoem cycles at 1 kHz in OP (issue 14 items
-1-4): a hostile local script sends foreign-Host (DNS rebinding), cross-origin text/plain and
+"""The control API under attack while pysoem cycles at 1 kHz in OP: a hostile local script
+sends foreign-Host (DNS rebinding), cross-origin text/plain and
 token-less requests that would unplug RIM 2, 25 MiB and 60 MiB bodies, a replay of a 60 MiB CSV
 (parsed off the device thread), and holds 40 slow connections. Meanwhile every working counter
 must be right, the slave must stay in OP, the refused requests must change nothing, and a

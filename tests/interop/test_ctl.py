@@ -1,4 +1,4 @@
-"""[usability] `rackcat ctl` against a running rack (issue 23): every subcommand prints text by
+"""`rackcat ctl` against a running rack: every subcommand prints text by
 default and the API's JSON with --json (before or after the command name); every answer to a
 change shows the state after it; a refused request prints the API's reason and exits 2.
 

@@ -1,4 +1,4 @@
-"""[line] A user's own line over veth under pysoem: coupler + 8-ch DI + 8-ch DO + CoE analog
+"""A user's own line over veth under pysoem: coupler + 8-ch DI + 8-ch DO + CoE analog
 terminal (all from tests/device/data/rackcat-test-devices.xml, written for these tests) + a
 Fusion.IO rack, from one line file (`rackcat run --line`). The identities and names SOEM reads
 equal the ESI's, config_map gives the sizes the ESI implies, the line reaches OP, a DO->DI

@@ -1,4 +1,4 @@
-"""[mdp] What an audit against the guide found, with a real master (pysoem).
+"""What an audit against the guide found, with a real master (pysoem).
 
 User-mappable PDOs: in PREOP the operator maps 0x2000:0F
 (CPU temperature, guide §4.8) and a thermocouple's loop resistance (0x5nn4, guide §2.6) into the

@@ -1,5 +1,5 @@
-"""[mdp] Detect Modules with Detect Modules Override 0 and a RIM offline (guide §4.2 Table 23,
-ETG.5001.1; issue 15 item 6), seen by pysoem: after 0xF002 "scan" and after a device reset
+"""Detect Modules with Detect Modules Override 0 and a RIM offline (guide §4.2 Table 23,
+ETG.5001.1), seen by pysoem: after 0xF002 "scan" and after a device reset
 0xFBF0, 0xF050 detected, 0x3000, the default 0xF030 and the default 0x1C12/0x1C13 describe the
 same modules, so the master's normal start-up (config_init, config_map, SAFEOP, OP) reaches OP
 without hand edits.

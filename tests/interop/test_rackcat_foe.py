@@ -1,4 +1,4 @@
-"""[foe] Firmware update and parameter backup over FoE (ETG.1000.6 §5.8) with pysoem (SOEM 1.4),
+"""Firmware update and parameter backup over FoE (ETG.1000.6 §5.8) with pysoem (SOEM 1.4),
 as SOEM's firm_update does it: INIT, the bootstrap mailbox from SII words 0x14-0x17 put into
 SM0/SM1 (amend_mbx), BOOT, foe_write, INIT; then a power cycle (restart of `rackcat run` with the
 same state directory) and the new version read back over SDO and from the SII.

@@ -63,7 +63,7 @@ def test_control_errors_are_exceptions_with_the_api_reason(rackcat_line):
         rackcat_line.control.unplug_rim(7)
     assert e.value.status == 400
     assert "rim" in e.value.reason
-    # Wrong methods: 405 with a JSON reason, for every method (issue 23).
+    # Wrong methods: 405 with a JSON reason, for every method.
     for method in ("POST", "PUT", "DELETE", "PATCH"):
         with pytest.raises(ControlError) as e:
             rackcat_line.control.request(method, "/api/rack", {} if method != "DELETE" else None)

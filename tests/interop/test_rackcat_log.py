@@ -1,4 +1,4 @@
-"""[usability] What `rackcat run --log-level info` tells a user while pysoem drives it (issue 23):
+"""What `rackcat run --log-level info` tells a user while pysoem drives it:
 every ESM transition with the master's AL control, a refused transition with its AL status code
 and meaning (an SM2 length that no longer matches the PDO assignment: 0x001D, ETG.1000.6 Table
 11), and a master that stops sending in OP: the process-data watchdog expiry and the fall to

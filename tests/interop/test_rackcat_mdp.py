@@ -1,4 +1,4 @@
-"""[mdp] The modular device's objects as a real master (pysoem) reads and writes them over the
+"""The modular device's objects as a real master (pysoem) reads and writes them over the
 wire: device and module information, module lists, and a stored parameter (0x2000:04 IPv4)
 that survives a restart of `rackcat run` with the same --state-dir.
 """
@@ -128,7 +128,7 @@ def test_detect_modules_after_rim_loss_and_configured_list(rackcat):
     """Configured (0xF030) versus detected (0xF050) modules. With Detect Modules Override 0,
     the Detect Modules command enumerates only the cards it detects now (guide Table 23): RIM
     2 unplugged -> 0xF050 holds RIM 1's 19 modules, and the default configured list 0xF030
-    follows it (mdp/module_enumeration.hpp, issue 15 item 6), so PREOP -> SAFEOP is accepted;
+    follows it (mdp/module_enumeration.hpp), so PREOP -> SAFEOP is accepted;
     after the replug and a new scan all 27 again. A configured list that contradicts the
     detected one is refused (0x06090033 over SDO; AL 0x0070 on PREOP -> SAFEOP, ETG.5001.1)."""
     rc = rackcat()

@@ -252,7 +252,7 @@ def test_store_into_a_root_owned_read_only_state_directory_fails(rackcat, tmp_pa
     assert list(state.iterdir()) == []
 
 
-# --- issue 14 item 7: a VLAN-tagged request is answered tagged, at full length --------------
+# --- a VLAN-tagged request is answered tagged, at full length --------------
 
 SOL_PACKET = 263
 PACKET_AUXDATA = 8
@@ -314,7 +314,7 @@ def test_vlan_tagged_request_is_answered_tagged(rackcat):
     assert struct.unpack("<H", data[14 + 2 + 10 + 2:14 + 2 + 10 + 4])[0] == 1  # WKC: one slave
 
 
-# --- issue 14 item 9: kill -9 loses at most 100 ms of capture ----------------------------------
+# --- kill -9 loses at most 100 ms of capture ----------------------------------
 
 def _pcap_times(path):
     data = Path(path).read_bytes()

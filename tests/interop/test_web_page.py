@@ -1,4 +1,4 @@
-"""The live web page (issue 21, docs/WEB.md) against the real device with pysoem cycling.
+"""The live web page (docs/WEB.md) against the real device with pysoem cycling.
 
 test_web_page_with_master: `rackcat run` prints a login URL; Debian's chromium, headless,
 driven by playwright-core (web/e2e/page_test.mjs, inside the slave's namespace) logs in, sees
