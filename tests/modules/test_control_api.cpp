@@ -110,7 +110,7 @@ TEST_F(ControlApiTest, InvalidRequestsGetAReasonAndChangeNothing) {
       {"POST", "/api/cpu_temperature", {{"celsius", 1000}}, "must be -55..150"},
       {"GET", "/api/channel", nullptr, "does not accept GET; use POST"},
       {"GET", "/api/nothing", nullptr, "no endpoint"},
-      // A misspelt key is named, not reported as another field missing (issue 23).
+      // A misspelt key is named, not reported as another field missing.
       {"POST", "/api/channel", {{"valu", 1}}, "unknown field 'valu' (/api/channel takes module"},
       {"POST", "/api/channel", {{"module", n}, {"channel", 0}}, "give 'value' or 'source'"},
       {"POST",
@@ -159,7 +159,7 @@ TEST_F(ControlApiTest, WrongMethodNamesTheAcceptedOne) {
   EXPECT_EQ(r.allow, "GET");
 }
 
-// Every answer to a change shows the state after it (issue 23): the value just set, the wire of
+// Every answer to a change shows the state after it: the value just set, the wire of
 // the faulted channel and the fan's new speed, with the exception tree they feed.
 TEST_F(ControlApiTest, AnswersShowTheStateAfterTheChange) {
   const uint16_t ain = at(1, 12).module().number;

@@ -1,6 +1,6 @@
 // Position, scaling, round-axis, preset and velocity arithmetic of the encoder card at its
 // edges. Every expected value is worked out by hand from the encoder guide's formulas
-// (../shared/reference/profinet-absolute-encoder-user-guide.txt; section numbers of its function
+// (the PROFINET absolute encoder user guide; section numbers of its function
 // table 3.11.x) in the comment next to it, not taken from the code under test.
 #include <gtest/gtest.h>
 

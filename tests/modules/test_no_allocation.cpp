@@ -54,7 +54,7 @@ TEST_F(RackTest, CyclicPathAllocatesNothing) {
   EXPECT_NE(module_obj(at(1, 12), 0x6000, 0x2).get_u(1), 0u);
 }
 
-// The whole device path a frame takes (issue 16): SM2 bytes through the process image into
+// The whole device path a frame takes: SM2 bytes through the process image into
 // the objects and the drivers, then the drivers, the input latch times (0xF6F0/0xF6F2) and the
 // process image back into SM3 bytes - with the entry descriptions shared with a second device
 // of the same rack (coe/shared_entries.hpp) and the file commands on the shared worker.
