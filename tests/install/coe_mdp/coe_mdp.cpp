@@ -1,7 +1,8 @@
 // Uses the installed MDP layer as a device maker would: the built-in default rack as an
 // mdp::Device, and one expedited SDO upload of 0x1018:02 (identity object, product code;
-// ETG.1000.6 §5.6.2.2) through its CoE (the data of one mailbox message). Exit 0 when the reply is an expedited upload
-// response of 4 bytes (command 0x43) for 0x1018:02 with a product code.
+// ETG.1000.6 §5.6.2.2) through its CoE (the data of one mailbox message). Exit 0 when the
+// reply is an expedited upload response of 4 bytes (command 0x43) for 0x1018:02 with a
+// product code.
 #include <array>
 #include <cstdio>
 #include <cstdlib>
