@@ -20,7 +20,8 @@ int main() {
   options.load_stored_parameters = false;
   mdp::Device device(mdp::default_rack(), options);
   // The mailbox serves SDOs from PREOP on (ETG.1000.6 §5.3): the ESM's side tells the device.
-  device.state_changed(EsmS  // CoE header (SDO request), upload initiate 0x40 of 0x1018:02: the mailbox data the
+  device.state_changed(EsmState::Init, EsmState::PreOp);
+  // CoE header (SDO request), upload initiate 0x40 of 0x1018:02: the mailbox data the
   // firmware's MailboxServer hands the device's CoE.
   const std::array<uint8_t, 10> request{0x00, 0x20, 0x40, 0x18, 0x10, 0x02, 0, 0, 0, 0};
   std::array<uint8_t, 250> reply{};
@@ -35,6 +36,5 @@ int main() {
   }
   std::printf("coe_mdp: 0x1018:02 product code = 0x%02x%02x%02x%02x\n", reply[9], reply[8],
               reply[7], reply[6]);
-       reply[13], reply[12]);
   return 0;
 }
