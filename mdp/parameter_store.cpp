@@ -39,7 +39,10 @@ std::vector<uint8_t> ParameterStore::encode(uint32_t fingerprint,
   le::put32(grow(out, 4), fingerprint);
   le::put32(grow(out, 4), static_cast<uint32_t>(payload.size()));
   out.insert(out.end(), payload.begin(), payload.end());
-  le::put32(grow(out, 4), crc32_of(out.data(), out.size()));
+  // The CRC covers everything before it: computed before the vector grows (the order in which
+  // a call's arguments are evaluated is unspecified - clang grew first, gcc did not).
+  const uint32_t crc = crc32_of(out.data(), out.size());
+  le::put32(grow(out, 4), crc);
   return out;
 }
 

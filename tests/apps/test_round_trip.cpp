@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -40,6 +41,11 @@ Bytes ask(ecat::MailboxProtocol& coe, const Bytes& request) {
   EXPECT_EQ(answer.error, mailbox::Error::None);
   size_t n = answer.length;
   while (n > 0) {
+    // Each fragment behind a 6-byte mailbox header that carries only its length (ETG.1000.4
+    // §5.6), so the answer is walked fragment by fragment as a master sees it on SM1.
+    const std::array<uint8_t, 6> header = {
+        static_cast<uint8_t>(n), static_cast<uint8_t>(n >> 8), 0, 0, 0, 0};
+    all.insert(all.end(), header.begin(), header.end());
     all.insert(all.end(), reply.begin(), reply.begin() + static_cast<long>(n));
     n = coe.poll(reply);
   }
