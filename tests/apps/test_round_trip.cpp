@@ -6,7 +6,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -14,6 +13,7 @@
 
 #include "apps/rack_slave/rack_loading.hpp"
 #include "apps/rack_slave/rack_slave.hpp"
+#include "base/mailbox_header.hpp"
 #include "device/esi_device.hpp"
 #include "device/generic_device.hpp"
 #include "esi/rack.hpp"
@@ -28,8 +28,9 @@ using testing::coe_message;
 
 constexpr uint8_t kSdoInfo = 0x08;  // CoE service (ETG.1000.6 Table 29)
 
-// One mailbox request (header included) to `coe` and the mailbox data of every fragment of
-// its answer (the firmware frames them; the frame carries nothing of the device's).
+// One mailbox request (header included) to `coe` and every fragment of its answer, each behind
+// a length-only mailbox header (the firmware frames them; the frame carries nothing of the
+// device's).
 Bytes ask(ecat::MailboxProtocol& coe, const Bytes& request) {
   Bytes all;
   std::vector<uint8_t> reply(1480);
@@ -41,11 +42,12 @@ Bytes ask(ecat::MailboxProtocol& coe, const Bytes& request) {
   EXPECT_EQ(answer.error, mailbox::Error::None);
   size_t n = answer.length;
   while (n > 0) {
-    // Each fragment behind a 6-byte mailbox header that carries only its length (ETG.1000.4
-    // §5.6), so the answer is walked fragment by fragment as a master sees it on SM1.
-    const std::array<uint8_t, 6> header = {
-        static_cast<uint8_t>(n), static_cast<uint8_t>(n >> 8), 0, 0, 0, 0};
-    all.insert(all.end(), header.begin(), header.end());
+    // Each fragment behind a mailbox header that carries only its length (ETG.1000.4 §5.6;
+    // counter 0 so two devices' answers compare), walked fragment by fragment as on SM1.
+    mailbox::Header header;
+    header.length = static_cast<uint16_t>(n);
+    all.resize(all.size() + mailbox::Header::kSize);
+    EXPECT_TRUE(header.encode(std::span(all).last(mailbox::Header::kSize)));
     all.insert(all.end(), reply.begin(), reply.begin() + static_cast<long>(n));
     n = coe.poll(reply);
   }

@@ -49,6 +49,24 @@ def cycle(master, n=1):
     return wkc
 
 
+def to_op(master):
+    """SAFEOP, one cycle, then OP while cycling (10 s at most); every slave's state and AL
+    status in the message when a step fails."""
+    def where():
+        return [(x.name, hex(x.state), hex(x.al_status)) for x in master.slaves]
+
+    master.state = pysoem.SAFEOP_STATE
+    master.write_state()
+    assert master.state_check(pysoem.SAFEOP_STATE, 3_000_000) == pysoem.SAFEOP_STATE, where()
+    cycle(master)
+    master.state = pysoem.OP_STATE
+    master.write_state()
+    deadline = time.monotonic() + 10
+    while master.state_check(pysoem.OP_STATE, 1000) != pysoem.OP_STATE:
+        cycle(master)
+        assert time.monotonic() < deadline, where()
+
+
 def test_line_reaches_op_with_esi_identities_and_loopback(ecat_segment, tmp_path):
     work = tmp_path / "line"
     work.mkdir()
@@ -81,18 +99,7 @@ def test_line_reaches_op_with_esi_identities_and_loopback(ecat_segment, tmp_path
         master.config_map()
         sizes = [(len(x.output), len(x.input)) for x in s[:4]]
         assert sizes == [(0, 0), (0, 1), (1, 0), (0, 8)], sizes
-        master.state = pysoem.SAFEOP_STATE
-        master.write_state()
-        assert master.state_check(pysoem.SAFEOP_STATE, 3_000_000) == pysoem.SAFEOP_STATE, \
-            [(x.name, hex(x.state), hex(x.al_status)) for x in s]
-        cycle(master)
-        master.state = pysoem.OP_STATE
-        master.write_state()
-        deadline = time.monotonic() + 10
-        while master.state_check(pysoem.OP_STATE, 1000) != pysoem.OP_STATE:
-            cycle(master)
-            assert time.monotonic() < deadline, \
-                [(x.name, hex(x.state), hex(x.al_status)) for x in s]
+        to_op(master)
         # DO -> DI loopback across devices (line file wiring).
         for pattern in (0xA5, 0x3C, 0x00):
             s[2].output = bytes([pattern])
@@ -161,18 +168,7 @@ def test_signal_sources_and_a_modular_device_with_its_modules(ecat_segment, tmp_
         master.config_map()
         sizes = [(len(x.output), len(x.input)) for x in s]
         assert sizes == [(0, 8), (0, 1), (1, 1)], sizes
-        master.state = pysoem.SAFEOP_STATE
-        master.write_state()
-        assert master.state_check(pysoem.SAFEOP_STATE, 3_000_000) == pysoem.SAFEOP_STATE, \
-            [(x.name, hex(x.state), hex(x.al_status)) for x in s]
-        cycle(master)
-        master.state = pysoem.OP_STATE
-        master.write_state()
-        deadline = time.monotonic() + 10
-        while master.state_check(pysoem.OP_STATE, 1000) != pysoem.OP_STATE:
-            cycle(master)
-            assert time.monotonic() < deadline, \
-                [(x.name, hex(x.state), hex(x.al_status)) for x in s]
+        to_op(master)
         values = set()
         deadline = time.monotonic() + 3
         while time.monotonic() < deadline and len(values) < 5:
