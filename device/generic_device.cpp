@@ -4,6 +4,7 @@
 
 #include <array>
 
+#include "base/little_endian.hpp"
 #include "ecat/slave/mailbox_server.hpp"
 
 #include "esi/describe_dictionary.hpp"
@@ -118,10 +119,9 @@ void GenericDevice::update_inputs(std::span<uint8_t> inputs) {
     if (source.owns_lock()) copy_bits(w.source->outputs_, w.from_bit, inputs_, w.to_bit, w.bits);
   }
   for (const auto& d : drivers_) {
-    const uint64_t v = d.code();
-    std::array<uint8_t, 8> le{};
-    for (size_t k = 0; k < le.size(); ++k) le[k] = static_cast<uint8_t>(v >> (8 * k));
-    copy_bits(le, 0, inputs_, d.to_bit, d.bits);
+    std::array<uint8_t, 8> code{};
+    le::put64(code.data(), d.code());
+    copy_bits(code, 0, inputs_, d.to_bit, d.bits);
   }
   if (image_) {
     // Inputs set from outside land in the mapped objects, which the master reads via SM3.
