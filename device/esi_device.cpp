@@ -627,6 +627,7 @@ class Reader {
   coe::Object read_object(pugi::xml_node o) {
     auto index = child_number(o, "Index");
     if (o.child("Index").attribute("DependOnSlot").as_bool()) index += index_offset_;
+    if (o.child("Index").attribute("DependOnSlotGroup").as_bool()) index += group_index_offset_;
     if (index <= 0 || index > 0xFFFF) fail(o, "object index out of range");
     std::string name = o.child("Name").text().get();
     auto type_node = o.child("Type");
@@ -694,6 +695,7 @@ class Reader {
     PdoDescription pdo;
     auto pdo_index = child_number(p, "Index");
     if (p.child("Index").attribute("DependOnSlot").as_bool()) pdo_index += pdo_offset_;
+    if (p.child("Index").attribute("DependOnSlotGroup").as_bool()) pdo_index += group_pdo_offset_;
     if (pdo_index < 0 || pdo_index > 0xFFFF) fail(p, "PDO index out of range");
     pdo.index = static_cast<uint16_t>(pdo_index);
     pdo.name = p.child("Name").text().get();
@@ -724,6 +726,8 @@ class Reader {
       auto entry_index = child_number(e, "Index");
       if (entry_index != 0 && e.child("Index").attribute("DependOnSlot").as_bool())
         entry_index += index_offset_;
+      if (entry_index != 0 && e.child("Index").attribute("DependOnSlotGroup").as_bool())
+        entry_index += group_index_offset_;
       if (entry_index < 0 || entry_index > 0xFFFF) fail(e, "PDO entry index out of range");
       en.index = static_cast<uint16_t>(entry_index);
       en.subindex = static_cast<uint8_t>(child_number(e, "SubIndex", 0));
@@ -859,12 +863,31 @@ class Reader {
     int64_t min = 0, max = 0;
     int64_t index_increment = 0, pdo_increment = 0;
     std::vector<uint32_t> idents;
+    std::vector<std::string> classes;  // ModuleClass/Class: modules whose Type@ModuleClass is one
+    int64_t group = -1;                // Slot@SlotGroup, -1 = none
+    int64_t group_index_increment = 0, group_pdo_increment = 0;
+
+    bool takes(pugi::xml_node module, uint32_t ident) const {
+      if (std::find(idents.begin(), idents.end(), ident) != idents.end()) return true;
+      const std::string cls = module.child("Type").attribute("ModuleClass").value();
+      return !cls.empty() && std::find(classes.begin(), classes.end(), cls) != classes.end();
+    }
+    // "0x00000001, 0x00000002, class \"DI\"" for the error a misplaced module gets.
+    std::string describe() const {
+      std::string s;
+      for (auto i : idents) s += (s.empty() ? "" : ", ") + hex8(i);
+      for (const auto& c : classes) s += (s.empty() ? "class \"" : ", class \"") + c + "\"";
+      return s.empty() ? std::string("no module") : s;
+    }
   };
 
   std::vector<SlotRule> slot_rules(pugi::xml_node slots) const {
     std::vector<SlotRule> rules;
     const auto index_inc = attr_number(slots, "SlotIndexIncrement", 0);
     const auto pdo_inc = attr_number(slots, "SlotPdoIncrement", 0);
+    const auto group_index_inc = attr_number(slots, "SlotGroupIndexIncrement", 0);
+    const auto group_pdo_inc = attr_number(slots, "SlotGroupPdoIncrement", 0);
+    const auto vendor_id = child_number(vendor_, "Id");
     for (auto s : slots.children("Slot")) {
       SlotRule r;
       r.name = s.child("Name").text().get();
@@ -873,10 +896,21 @@ class Reader {
       r.max = attr_number(s, "MaxInstances", 0);
       r.index_increment = attr_number(s, "SlotIndexIncrement", index_inc);
       r.pdo_increment = attr_number(s, "SlotPdoIncrement", pdo_inc);
-      if (s.child("ModuleClass"))
-        fail(s.child("ModuleClass"), "<Slot> with <ModuleClass> is not supported (ModuleIdent)");
+      r.group = attr_number(s, "SlotGroup", -1);
+      if (r.group < -1 || r.group > 255) fail(s, "SlotGroup out of range");
+      r.group_index_increment = attr_number(s, "SlotGroupIndexIncrement", group_index_inc);
+      r.group_pdo_increment = attr_number(s, "SlotGroupPdoIncrement", group_pdo_inc);
       for (auto m : s.children("ModuleIdent"))
         r.idents.push_back(static_cast<uint32_t>(number(m, m.text().get(), "ModuleIdent")));
+      // ETG.2000 SlotType ModuleClass: any module whose Type@ModuleClass is the Class; with a
+      // VendorId, only that vendor's modules (this file's <Modules> are its <Vendor>'s).
+      for (auto c : s.children("ModuleClass")) {
+        const std::string cls = c.child("Class").text().get();
+        if (cls.empty()) fail(c, "<ModuleClass> without <Class>");
+        if (auto v = c.child("VendorId"); v && number(v, v.text().get(), "VendorId") != vendor_id)
+          continue;
+        r.classes.push_back(cls);
+      }
       rules.push_back(std::move(r));
     }
     return rules;
@@ -980,9 +1014,11 @@ class Reader {
     struct Placed {
       pugi::xml_node module;
       const ModuleChoice* choice;
-      int64_t index_offset, pdo_offset;
+      int64_t index_offset, pdo_offset;              // DependOnSlot
+      int64_t group_index_offset, group_pdo_offset;  // DependOnSlotGroup
     };
     std::vector<Placed> placed;
+    std::map<int64_t, int64_t> in_group;  // modules placed so far per SlotGroup
     size_t rule = 0;
     int64_t in_rule = 0;
     for (size_t k = 0; k < choices.size(); ++k) {
@@ -992,36 +1028,38 @@ class Reader {
       if (static_cast<int64_t>(k) >= max_slots)
         fail_choice(c, "module " + std::to_string(k + 1) + " is more than the device's " +
                            std::to_string(max_slots) + " slots (MaxSlotCount)");
+      const std::string what = "module " + hex8(ident) + " (" + module.child("Type").text().get() +
+                               ") is not allowed in slot position " + std::to_string(k + 1);
       const size_t first_rule = rule;
+      const int64_t first_in_rule = in_rule;
       for (;;) {
         if (rule >= rules.size()) {
-          const auto& r =
-              rules.empty() ? SlotRule{} : rules[std::min(first_rule, rules.size() - 1)];
-          std::string allowed;
-          for (auto i : r.idents) allowed += (allowed.empty() ? "" : ", ") + hex8(i);
-          fail_choice(c, "module " + hex8(ident) + " (" + module.child("Type").text().get() +
-                             ") is not allowed in slot position " + std::to_string(k + 1) +
-                             ": slot \"" + r.name + "\" takes " +
-                             (allowed.empty() ? std::string("no module") : allowed));
+          // Every slot it could still have gone to, from where it started.
+          std::string slots_left;
+          for (size_t i = first_rule; i < rules.size(); ++i) {
+            slots_left += std::string(slots_left.empty() ? ": " : "; ") + "slot \"" +
+                          rules[i].name + "\" takes " + rules[i].describe();
+            if (i == first_rule && first_in_rule >= rules[i].max)
+              slots_left += " (full: MaxInstances " + std::to_string(rules[i].max) + ")";
+          }
+          fail_choice(c, what + (slots_left.empty() ? ": <Slots> has no <Slot>" : slots_left));
         }
         const auto& r = rules[rule];
-        const bool allowed = std::find(r.idents.begin(), r.idents.end(), ident) != r.idents.end();
-        if (allowed && in_rule < r.max) break;
-        if (in_rule < r.min) {
-          std::string list;
-          for (auto i : r.idents) list += (list.empty() ? "" : ", ") + hex8(i);
-          fail_choice(c, "module " + hex8(ident) + " (" + module.child("Type").text().get() +
-                             ") is not allowed in slot position " + std::to_string(k + 1) +
-                             ": slot \"" + r.name + "\" takes " + list + " and needs " +
+        if (r.takes(module, ident) && in_rule < r.max) break;
+        if (in_rule < r.min)
+          fail_choice(c, what + ": slot \"" + r.name + "\" takes " + r.describe() + " and needs " +
                              std::to_string(r.min) + " module(s)");
-        }
         ++rule;
         in_rule = 0;
       }
       const auto& r = rules[rule];
       ++in_rule;
-      const auto pos = static_cast<int64_t>(k);
-      placed.push_back({module, &c, pos * r.index_increment, pos * r.pdo_increment});
+      // A slot of a SlotGroup counts its position within the group; the group's number moves
+      // DependOnSlotGroup indices (ETG.2000 SlotType SlotGroup/SlotGroupIndexIncrement).
+      const auto pos = r.group >= 0 ? in_group[r.group]++ : static_cast<int64_t>(k);
+      const int64_t g = std::max<int64_t>(r.group, 0);
+      placed.push_back({module, &c, pos * r.index_increment, pos * r.pdo_increment,
+                        g * r.group_index_increment, g * r.group_pdo_increment});
       out.module_idents.push_back(ident);
     }
     for (size_t r = rule; r < rules.size(); ++r) {
@@ -1052,16 +1090,19 @@ class Reader {
                                  [](const PdoDescription& p) { return p.from_module; }),
                   pdos->end());
     }
-    std::set<int64_t> increments;
-    for (const auto& r : rules) increments.insert(r.index_increment);
     for (auto m : catalogue_.children("Module"))
       for (auto o : m.child("Profile").child("Dictionary").child("Objects").children("Object")) {
         auto idx = o.child("Index");
-        if (!idx.attribute("DependOnSlot").as_bool()) continue;
+        const bool by_slot = idx.attribute("DependOnSlot").as_bool();
+        const bool by_group = idx.attribute("DependOnSlotGroup").as_bool();
+        if (!by_slot && !by_group) continue;
         const auto base = number(idx, idx.text().get(), "Index");
-        for (const auto inc : increments)
+        for (const auto& r : rules) {
+          const int64_t g = by_group ? std::max<int64_t>(r.group, 0) * r.group_index_increment : 0;
+          const int64_t inc = by_slot ? r.index_increment : 0;
           for (int64_t k = 0; k < max_slots && (inc != 0 || k == 0); ++k)
-            if (base + k * inc <= 0xFFFF) od.remove(static_cast<uint16_t>(base + k * inc));
+            if (base + g + k * inc <= 0xFFFF) od.remove(static_cast<uint16_t>(base + g + k * inc));
+        }
       }
 
     std::set<uint16_t> from_modules;
@@ -1069,6 +1110,8 @@ class Reader {
     for (const auto& p : placed) {
       index_offset_ = p.index_offset;
       pdo_offset_ = p.pdo_offset;
+      group_index_offset_ = p.group_index_offset;
+      group_pdo_offset_ = p.group_pdo_offset;
       module_choice_ = p.choice;
       types_ = saved_types;  // a module's DataTypes are its own (names repeat across modules)
       auto dict = p.module.child("Profile").child("Dictionary");
@@ -1082,7 +1125,8 @@ class Reader {
           coe::Object obj = read_object(o);
           const uint16_t index = obj.index();
           if (from_modules.count(index)) {
-            if (o.child("Index").attribute("DependOnSlot").as_bool())
+            if (o.child("Index").attribute("DependOnSlot").as_bool() ||
+                o.child("Index").attribute("DependOnSlotGroup").as_bool())
               fail_choice(*p.choice, "module object " + hex4(index) +
                                          " collides with an earlier module's (SlotIndexIncrement "
                                          "too small for the module)");
@@ -1120,9 +1164,13 @@ class Reader {
       }
     }
     types_ = saved_types;
-    index_offset_ = pdo_offset_ = 0;
+    index_offset_ = pdo_offset_ = group_index_offset_ = group_pdo_offset_ = 0;
 
     if (!out.has_coe) return;
+    std::vector<pugi::xml_node> modules;
+    modules.reserve(placed.size());
+    for (const auto& p : placed) modules.push_back(p.module);
+    follow_slot_lists(od, out.module_idents, modules);
     namespace acc = coe::access;
     for (uint16_t assign : {uint16_t{0x1C12}, uint16_t{0x1C13}}) {
       if (!od.find(assign)) continue;  // derived from the PDOs in complete_dictionary
@@ -1136,6 +1184,46 @@ class Reader {
              acc::kRoWrPreOp, out.module_idents, static_cast<size_t>(max_slots), "Module %u");
     set_list(od, 0xF050, "Detected Module Ident List", coe::DataType::Unsigned32, 32, acc::kRo,
              out.module_idents, out.module_idents.size(), "Module %u");
+  }
+
+  // Device-level lists with one entry per slot follow the chosen modules (ETG.5001.1 §5.3):
+  // - a module ident list: an ARRAY of 32-bit entries that holds, in the ESI, exactly the
+  //   default module configuration (the device level's 0xF050 detected list, else its 0xF030),
+  //   e.g. the rack's 0x3000 Module Ident Map, or a 0xF010 that lists idents as the Fusion.IO
+  //   guide's does: it gets the chosen idents;
+  // - otherwise 0xF010 Module Profile List: entry n = the profile number of the module in slot n
+  //   (its <Profile><ProfileNo>; 0 for a module without one).
+  // Each keeps its name, type and access; subindex 0 = the number of modules.
+  static void follow_slot_lists(coe::ObjectDictionary& od, const std::vector<uint32_t>& idents,
+                                const std::vector<pugi::xml_node>& modules) {
+    std::vector<uint64_t> defaults;
+    for (uint16_t index : {uint16_t{0xF050}, uint16_t{0xF030}}) {
+      const coe::Object* o = od.find(index);
+      if (!o || o->sub0() == 0 || !defaults.empty()) continue;
+      for (uint8_t i = 1; i <= o->sub0() && o->entry(i); ++i) defaults.push_back(o->get_u(i));
+    }
+    std::vector<uint16_t> ident_lists;
+    od.for_each([&](const coe::Object& o) {
+      const uint16_t i = o.index();
+      if (i == 0xF030 || i == 0xF050 || i == 0x1C12 || i == 0x1C13 || defaults.empty()) return;
+      if (o.code() != coe::ObjectCode::Array || o.sub0() != defaults.size()) return;
+      for (uint8_t k = 1; k <= o.sub0(); ++k)
+        if (!o.entry(k) || o.entry(k)->bit_length != 32 || o.get_u(k) != defaults[k - 1u]) return;
+      ident_lists.push_back(i);
+    });
+    for (uint16_t i : ident_lists)
+      set_list(od, i, "", coe::DataType::Unsigned32, 32, coe::access::kRo, idents, idents.size(),
+               "Module %u");
+    if (od.find(0xF010) &&
+        std::find(ident_lists.begin(), ident_lists.end(), 0xF010) == ident_lists.end()) {
+      std::vector<uint32_t> profiles;
+      for (auto m : modules) {
+        const auto no = parse_hex_dec(m.child("Profile").child("ProfileNo").text().get());
+        profiles.push_back(static_cast<uint32_t>(no.value_or(0)));
+      }
+      set_list(od, 0xF010, "", coe::DataType::Unsigned32, 32, coe::access::kRo, profiles,
+               profiles.size(), "Module %u");
+    }
   }
 
   static std::string hex8(uint32_t v) {
@@ -1277,6 +1365,8 @@ class Reader {
   // While a chosen module is read: what its DependOnSlot indices move by (ETG.2000 Slots).
   int64_t index_offset_ = 0;
   int64_t pdo_offset_ = 0;
+  int64_t group_index_offset_ = 0;  // DependOnSlotGroup: SlotGroup x SlotGroupIndexIncrement
+  int64_t group_pdo_offset_ = 0;    // and SlotGroup x SlotGroupPdoIncrement
   const ModuleChoice* module_choice_ = nullptr;  // the last module placed (for SM size errors)
 };
 

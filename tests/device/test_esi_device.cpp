@@ -149,8 +149,8 @@ TEST(EsiDevice, ModularDeviceAsItsDeviceLevelDescription) {
 
 // ETG.5001 with a chosen module list: each module's objects and PDOs at its slot position
 // (SlotIndexIncrement 0x10, SlotPdoIncrement 1), the ident lists 0xF030/0xF050 naming them.
-DeviceSelector with_modules(std::vector<std::string> refs) {
-  DeviceSelector s = DeviceSelector::named("RC5001");
+DeviceSelector with_modules(std::vector<std::string> refs, const char* device = "RC5001") {
+  DeviceSelector s = DeviceSelector::named(device);
   s.modules.emplace();
   size_t line = 10;
   for (auto& r : refs) s.modules->push_back({r, "line.yaml", line++});
@@ -190,9 +190,10 @@ TEST(EsiDevice, ModularDeviceWithChosenModules) {
   EXPECT_EQ(dev.description.sms[3].default_size, 2);
 }
 
-void expect_module_error(std::vector<std::string> refs, size_t line, const std::string& part) {
+void expect_module_error(std::vector<std::string> refs, size_t line, const std::string& part,
+                         const char* device = "RC5001") {
   try {
-    load_esi_device(kFile, with_modules(std::move(refs)));
+    load_esi_device(kFile, with_modules(std::move(refs), device));
     FAIL() << "expected an error containing " << part;
   } catch (const FileError& e) {
     EXPECT_EQ(e.file(), "line.yaml") << e.what();
@@ -214,6 +215,66 @@ TEST(EsiDeviceErrors, ModuleNotAllowedInItsSlot) {
 TEST(EsiDeviceErrors, MoreModulesThanSlots) {
   expect_module_error({"RM-DI4", "RM-DI4", "RM-DI4", "RM-DI4", "RM-DO4"}, 14,
                       "more than the device's 4 slots");
+}
+
+// ETG.2000 SlotGroups and ModuleClass (RC5002): group 0 takes class "DI" modules, group 1
+// RM-DO4. DependOnSlot indices move by the position within the group x SlotIndexIncrement
+// (0x10) / SlotPdoIncrement (1), DependOnSlotGroup ones by SlotGroup x SlotGroupIndexIncrement
+// (0x100) / SlotGroupPdoIncrement (0x20). The device-level per-slot lists follow: 0x3000 (held
+// the default configuration's idents) gets the chosen idents, 0xF010 the modules' ProfileNo.
+TEST(EsiDevice, SlotGroupsAndModuleClass) {
+  const auto dev =
+      load_esi_device(kFile, with_modules({"RM-DI4", "RM-DI4", "RM-DO4", "RM-DO4"}, "RC5002"));
+  ASSERT_EQ(dev.module_idents, (std::vector<uint32_t>{1, 1, 2, 2}));
+  const auto& d = dev.description;
+  ASSERT_EQ(d.tx_pdos.size(), 2u);
+  EXPECT_EQ(d.tx_pdos[0].index, 0x1A00);
+  EXPECT_EQ(d.tx_pdos[1].index, 0x1A01);
+  EXPECT_EQ(d.tx_pdos[1].entries[0].index, 0x6010);
+  ASSERT_EQ(d.rx_pdos.size(), 2u);
+  EXPECT_EQ(d.rx_pdos[0].index, 0x1620);
+  EXPECT_EQ(d.rx_pdos[0].entries[0].index, 0x7100);
+  EXPECT_EQ(d.rx_pdos[1].index, 0x1621);
+  EXPECT_EQ(d.rx_pdos[1].entries[3].index, 0x7110);
+  const auto& od = dev.dictionary;
+  for (uint16_t i : {0x6000, 0x6010, 0x7100, 0x7110, 0x1620, 0x1621})
+    EXPECT_NE(od.find(i), nullptr) << std::hex << i;
+  for (uint16_t i : {0x7000, 0x7010, 0x6020, 0x1600})
+    EXPECT_EQ(od.find(i), nullptr) << std::hex << i;
+  const auto* mapping = od.find(0x1621);
+  ASSERT_NE(mapping, nullptr);
+  EXPECT_EQ(mapping->get_u(1), 0x71100101u);
+  auto list = [&](uint16_t index) {
+    std::vector<uint64_t> v;
+    const auto* o = od.find(index);
+    if (o)
+      for (uint8_t i = 1; i <= o->sub0(); ++i) v.push_back(o->get_u(i));
+    return v;
+  };
+  EXPECT_EQ(list(0xF050), (std::vector<uint64_t>{1, 1, 2, 2}));
+  EXPECT_EQ(list(0xF030), (std::vector<uint64_t>{1, 1, 2, 2}));
+  EXPECT_EQ(list(0x3000), (std::vector<uint64_t>{1, 1, 2, 2}));
+  EXPECT_EQ(list(0xF010), (std::vector<uint64_t>{1101, 1101, 1102, 1102}));
+  EXPECT_EQ(od.find(0x3000)->name(), "Module Ident Map");
+  EXPECT_EQ(list(0x1C12), (std::vector<uint64_t>{0x1620, 0x1621}));
+  EXPECT_EQ(d.sms[2].default_size, 2);
+  EXPECT_EQ(d.sms[3].default_size, 2);
+}
+
+TEST(EsiDeviceErrors, ModuleOfAnotherClassInASlotGroup) {
+  expect_module_error({"RM-DO4"}, 10,
+                      "module 0x00000002 (RM-DO4) is not allowed in slot position 1: slot "
+                      "\"Input group\" takes class \"DI\" and needs 1 module(s)",
+                      "RC5002");
+  expect_module_error({"RM-DI4", "RM-PS"}, 11,
+                      "module 0x00000003 (RM-PS) is not allowed in slot position 2: slot "
+                      "\"Input group\" takes class \"DI\"; slot \"Output group\" takes 0x00000002",
+                      "RC5002");
+  expect_module_error({"RM-DI4", "RM-DI4", "RM-DI4"}, 12,
+                      "module 0x00000001 (RM-DI4) is not allowed in slot position 3: slot "
+                      "\"Input group\" takes class \"DI\" (full: MaxInstances 2); slot "
+                      "\"Output group\" takes 0x00000002",
+                      "RC5002");
 }
 
 TEST(EsiDeviceErrors, NotXml) {

@@ -134,6 +134,9 @@ devices:
     modules: [RM-DI4, RM-DO4]
     inputs:
       - {bits: 4, source: constant, value: 9, signed: false}
+  - esi: rackcat-test-devices.xml
+    device: RC5002
+    modules: [RM-DI4, RM-DO4]
 """
 
 
@@ -150,12 +153,23 @@ def test_signal_sources_and_a_modular_device_with_its_modules(ecat_segment, tmp_
     q = shlex.quote
     cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --line {q(str(work / 'line.yaml'))} "
            f"--no-control --no-pty --state-dir {q(str(tmp_path / 'state'))}")
-    iface, slave = ecat_segment(slaves=3, cmd=cmd, pcap=False)
+    iface, slave = ecat_segment(slaves=4, cmd=cmd, pcap=False)
     master = pysoem.Master()
     master.open(iface)
     try:
-        assert master.config_init() == 3
+        assert master.config_init() == 4
         s = master.slaves
+        # RC5002 (slot groups, ModuleClass): RM-DI4 in group 0, RM-DO4 in group 1 at
+        # 0x7000 + 1 x 0x100 with its PDO 0x1600 + 1 x 0x20; its device-level lists follow.
+        grp = s[3]
+        u32 = lambda index, sub: int.from_bytes(grp.sdo_read(index, sub), "little")
+        for index, want in ((0xF030, [1, 2]), (0xF050, [1, 2]), (0x3000, [1, 2]),
+                            (0xF010, [1101, 1102]), (0x1C12, [0x1620]), (0x1C13, [0x1A00])):
+            assert grp.sdo_read(index, 0)[0] == len(want), hex(index)
+            assert [u32(index, k + 1) for k in range(len(want))] == want, hex(index)
+        assert u32(0x1620, 1) == 0x71000101 and u32(0x1A00, 1) == 0x60000101
+        od = {obj.index: obj.name for obj in grp.od}
+        assert od[0x7100] == b"DO4 outputs" and 0x7000 not in od, od
         mod = s[2]
         assert mod.id == 0x5001
         for index in (0xF030, 0xF050):
@@ -167,7 +181,7 @@ def test_signal_sources_and_a_modular_device_with_its_modules(ecat_segment, tmp_
         assert 0x7000 not in od and 0x6010 not in od
         master.config_map()
         sizes = [(len(x.output), len(x.input)) for x in s]
-        assert sizes == [(0, 8), (0, 1), (1, 1)], sizes
+        assert sizes == [(0, 8), (0, 1), (1, 1), (1, 1)], sizes
         to_op(master)
         values = set()
         deadline = time.monotonic() + 3
