@@ -5,6 +5,7 @@
 #include <array>
 
 #include "base/little_endian.hpp"
+#include "device/pdo_checks.hpp"
 #include "ecat/slave/mailbox_server.hpp"
 
 #include "esi/describe_dictionary.hpp"
@@ -37,6 +38,7 @@ uint16_t assigned_bytes(const std::vector<esi::PdoDescription>& pdos) {
 GenericDevice::GenericDevice(EsiDevice esi) : esi_(std::move(esi)) {
   sii_ = esi::encode_sii(esi_.description).bytes;
   if (esi_.has_coe) {
+    install_pdo_checks(esi_.dictionary, esi_.description);
     sdo_ = std::make_unique<coe::SdoServer>(esi_.dictionary);
     image_ = std::make_unique<coe::ProcessImage>(esi_.dictionary);
     image_->compile();

@@ -1,6 +1,8 @@
 // ENI reader (see eni_file.hpp; ETG.2100 EtherCATConfig).
 #include "apps/line/eni_file.hpp"
 
+#include "apps/line/init_cmd_replay.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -194,8 +196,10 @@ class EniReader {
     if (auto serial = info.child("SerialNo"))
       ld.esi->description.serial =
           static_cast<uint32_t>(number(serial, serial.text().get(), "SerialNo"));
-    if (auto pd = slave.child("ProcessData")) apply_process_data(pd, *ld.esi);
+    const auto pd = slave.child("ProcessData");
+    if (pd) apply_process_data(pd, *ld.esi);
     check_init_cmds(slave, *ld.esi);
+    if (ld.esi->has_coe) replay_init_cmds(slave, *ld.esi, pd.child("RxPdo") || pd.child("TxPdo"));
     return ld;
   }
 
@@ -437,6 +441,83 @@ class EniReader {
       if (text ? bytes > e->byte_length() : bytes != e->byte_length())
         fail(c, "InitCmd writes " + std::to_string(bytes) + " byte(s) to " + what + " (" + e->name +
                     ") which has " + std::to_string(e->byte_length()));
+    }
+  }
+
+  // The CoE init commands the master sends on its way to OP (transitions IP and PS in PREOP,
+  // SO in SAFEOP; file order within one) replayed through the device's SDO server
+  // (init_cmd_replay.hpp): an SDO abort is the error at that command. The PDO assignment they
+  // leave (0x1C12/0x1C13) must be the ENI's ProcessData assignment when that gives one;
+  // otherwise it becomes the device's start-up assignment (SII PDOs, SM sizes, 0x1C12/0x1C13),
+  // so what the master reads before configuring equals what it configures.
+  void replay_init_cmds(pugi::xml_node slave, device::EsiDevice& dev, bool pd_assigned) const {
+    std::vector<SdoWrite> writes;
+    std::map<uint16_t, size_t> last_line;  // per object: the last command writing it
+    const auto cmds = slave.child("Mailbox").child("CoE").child("InitCmds");
+    for (const char* tr : {"IP", "PS", "SO"}) {
+      for (auto c : cmds.children("InitCmd")) {
+        if (auto ccs = c.child("Ccs"); ccs && number(ccs, ccs.text().get(), "Ccs") != 1) continue;
+        bool on = false;
+        for (auto t : c.children("Transition")) on = on || std::string_view(t.text().get()) == tr;
+        if (!on) continue;
+        SdoWrite w;
+        w.line = line_of(c);
+        w.state = tr[0] == 'S' ? EsmState::SafeOp : EsmState::PreOp;
+        w.index = static_cast<uint16_t>(child_number(c, "Index"));
+        w.subindex = static_cast<uint8_t>(child_number(c, "SubIndex"));
+        const std::string_view ca = c.attribute("CompleteAccess").value();
+        w.complete_access = ca == "true" || ca == "1";
+        const std::string hex = c.child("Data").text().get();
+        for (size_t i = 0; i + 1 < hex.size(); i += 2)
+          w.data.push_back(parse_hex_byte(hex[i], hex[i + 1]).value_or(0));
+        last_line[w.index] = w.line;
+        writes.push_back(std::move(w));
+      }
+    }
+    if (writes.empty()) return;
+    const coe::ObjectDictionary after = replay_sdo_writes(dev, writes, file_);
+    auto& d = dev.description;
+    for (const bool rx : {true, false}) {
+      const uint16_t index = rx ? 0x1C12 : 0x1C13;
+      const coe::Object* now = after.find(index);
+      const coe::Object* before = dev.dictionary.find(index);
+      if (!now || !before || !last_line.count(index)) continue;
+      std::vector<uint16_t> want, got;
+      for (uint8_t i = 1; i <= before->sub0(); ++i)
+        want.push_back(static_cast<uint16_t>(before->get_u(i)));
+      for (uint8_t i = 1; i <= now->sub0(); ++i)
+        got.push_back(static_cast<uint16_t>(now->get_u(i)));
+      if (got == want) continue;
+      auto list = [](const std::vector<uint16_t>& v) {
+        std::string t;
+        for (auto i : v) t += (t.empty() ? "" : ", ") + hex16(i);
+        return t.empty() ? std::string("none") : t;
+      };
+      if (pd_assigned)
+        throw device::FileError(file_, last_line[index],
+                                "the init commands leave " + hex16(index) + " = " + list(got) +
+                                    " but ProcessData assigns " + list(want));
+      auto& pdos = rx ? d.rx_pdos : d.tx_pdos;
+      std::vector<esi::PdoDescription> on;
+      for (auto& p : pdos) {
+        p.assigned = std::find(got.begin(), got.end(), p.index) != got.end();
+        if (p.assigned) on.push_back(p);
+      }
+      for (auto g : got)
+        if (std::none_of(on.begin(), on.end(), [&](const auto& p) { return p.index == g; }))
+          throw device::FileError(file_, last_line[index],
+                                  "the init commands assign " + hex16(g) + " in " + hex16(index) +
+                                      " but " + d.order_code + " (" + dev.file +
+                                      ") describes no such PDO");
+      // The SII lists the PDOs in assignment order.
+      std::stable_sort(pdos.begin(), pdos.end(), [&](const auto& a, const auto& b) {
+        auto pos = [&](uint16_t i) { return std::find(got.begin(), got.end(), i) - got.begin(); };
+        return pos(a.index) < pos(b.index);
+      });
+      for (auto& sm : d.sms)
+        if (sm.type == (rx ? esi::SmType::ProcessOut : esi::SmType::ProcessIn))
+          sm.default_size = esi::pdo_bytes(on);
+      set_assignment(dev, index, on, slave);
     }
   }
 

@@ -166,12 +166,88 @@ TEST_F(EniFileTest, ConfiguredListWithoutItsEntries) {
   expect_error(eni, line_of(eni, "<InitCmd><"), "no init command sets subindex 1");
 }
 
+// The analog terminal's init commands assign 0x1A01 alone (0x1C13:01, then the count 1).
+void assign_only_1a01(std::string& eni) {
+  replace(eni, "<SubIndex>1</SubIndex><Data>001a</Data>",
+          "<SubIndex>1</SubIndex><Data>011a</Data>");
+  replace(eni,
+          "<InitCmd Fixed=\"true\"><Transition>PS</Transition><Comment>download pdo 0x1C13:02 "
+          "index</Comment><Timeout>0</Timeout><Ccs>1</Ccs><Index>7187</Index><SubIndex>2</"
+          "SubIndex><Data>011a</Data></InitCmd>",
+          "");
+  replace(eni, "<SubIndex>0</SubIndex><Data>02</Data>", "<SubIndex>0</SubIndex><Data>01</Data>");
+}
+
+// Without an assignment in ProcessData, the init commands' assignment becomes the device's
+// start-up assignment: 0x1C13, the SII's assigned PDOs and SM3's size.
+TEST_F(EniFileTest, TheInitCmdsAssignmentBecomesTheStartUpAssignment) {
+  std::string eni = eni_;
+  const size_t from = eni.find("<TxPdo Sm=\"3\"><Index>#x1a00</Index>");
+  const size_t to = eni.find("</ProcessData>", from);
+  eni.erase(from, to - from);
+  replace(eni, "<Recv><BitStart>8</BitStart><BitLength>64</BitLength></Recv>", "");
+  assign_only_1a01(eni);
+  const auto line = load(eni);
+  const auto& ai = *line.devices[3].esi;
+  EXPECT_EQ(device::GenericDevice(ai).process_data_sizes().inputs, 4u);
+  EXPECT_EQ(ai.dictionary.find(0x1C13)->get_u(0), 1u);
+  EXPECT_EQ(ai.dictionary.find(0x1C13)->get_u(1), 0x1A01u);
+  ASSERT_EQ(ai.description.tx_pdos.size(), 2u);
+  EXPECT_EQ(ai.description.tx_pdos[0].index, 0x1A01);
+  EXPECT_TRUE(ai.description.tx_pdos[0].assigned);
+  EXPECT_FALSE(ai.description.tx_pdos[1].assigned);
+  EXPECT_EQ(ai.description.sms[3].default_size, 4);
+}
+
+// The init commands contradict the ENI's own process image.
+TEST_F(EniFileTest, InitCmdsContradictTheProcessData) {
+  std::string eni = eni_;
+  replace(eni, "<Recv><BitStart>8</BitStart><BitLength>64</BitLength></Recv>",
+          "<Recv><BitStart>8</BitStart><BitLength>32</BitLength></Recv>");
+  replace(eni, "<TxPdo Sm=\"3\"><Index>#x1a00</Index>", "<TxPdo><Index>#x1a00</Index>");
+  expect_error(eni, line_of(eni, "<Comment>download pdo 0x1C13 count"),
+               "the init commands leave #x1C13 = #x1A00, #x1A01 but ProcessData assigns #x1A01");
+}
+
+// The master's download would be refused by the device: the SDO abort, at that command.
+TEST_F(EniFileTest, InitCmdAssigningAPdoTheDeviceLacks) {
+  std::string eni = eni_;
+  replace(eni, "<SubIndex>1</SubIndex><Data>001a</Data>",
+          "<SubIndex>1</SubIndex><Data>051a</Data>");
+  expect_error(eni, line_of(eni, "<Comment>download pdo 0x1C13:01"),
+               "InitCmd writes 0x1C13:1 but RC3102 (");
+  expect_error(eni, line_of(eni, "<Comment>download pdo 0x1C13:01"),
+               "answers SDO abort 0x06020000");
+}
+
+// A modular device: the module list (0xF030) and then the assignment of the chosen modules'
+// PDOs at their slot indices (RM-DO4 in slot 1, RM-DI4 in slot 2: TxPDO 0x1A01).
+TEST_F(EniFileTest, ModuleInitCmdsConfigureTheChosenModules) {
+  const std::string modules =
+      "<InitCmd CompleteAccess=\"true\"><Transition>PS</Transition><Index>#xF030</Index>"
+      "<SubIndex>0</SubIndex><Data>02000200000001000000</Data></InitCmd>\n"
+      "<InitCmd><Transition>PS</Transition><Index>#x1C13</Index><SubIndex>0</SubIndex>"
+      "<Data>00</Data></InitCmd>\n";
+  const auto line =
+      load(modular_eni(modules + "<InitCmd><Transition>PS</Transition><Index>#x1C13</Index>"
+                                 "<SubIndex>1</SubIndex><Data>011a</Data></InitCmd>\n"
+                                 "<InitCmd><Transition>PS</Transition><Index>#x1C13</Index>"
+                                 "<SubIndex>0</SubIndex><Data>01</Data></InitCmd>\n"));
+  EXPECT_EQ(line.devices[0].esi->dictionary.find(0x1C13)->get_u(1), 0x1A01u);
+  const std::string eni = modular_eni(modules +
+                                      "<InitCmd><Transition>PS</Transition><Index>#x1C13</Index>"
+                                      "<SubIndex>1</SubIndex><Data>001a</Data></InitCmd>\n");
+  expect_error(eni, line_of(eni, "<Data>001a"), "answers SDO abort 0x06020000");
+}
+
 TEST_F(EniFileTest, TheEnisAssignmentBecomesTheStartUpAssignment) {
   // Only TxPDO 0x1A01 assigned: 4 input bytes, 0x1C13 = {1: 0x1A01}.
   std::string eni = eni_;
   replace(eni, "<Recv><BitStart>8</BitStart><BitLength>64</BitLength></Recv>",
           "<Recv><BitStart>8</BitStart><BitLength>32</BitLength></Recv>");
   replace(eni, "<TxPdo Sm=\"3\"><Index>#x1a00</Index>", "<TxPdo><Index>#x1a00</Index>");
+  // The init commands the master sends assign the same (they are replayed and must agree).
+  assign_only_1a01(eni);
   const auto line = load(eni);
   const auto& ai = *line.devices[3].esi;
   EXPECT_EQ(device::GenericDevice(ai).process_data_sizes().inputs, 4u);
