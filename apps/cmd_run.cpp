@@ -37,6 +37,7 @@
 #include "apps/rack_slave/rack_loading.hpp"
 #include "apps/rack_slave/rack_slave.hpp"
 #include "apps/slave_link.hpp"
+#include "device/foe_files.hpp"
 #include "device/generic_device.hpp"
 #include "ecat/host/runner.hpp"
 #include "ecat/segment.hpp"
@@ -109,6 +110,9 @@ int run(const RunArgs& a) {
   if (!state->usable()) spdlog::warn("rackcat: {}", state->problem());
   std::vector<ecat::Application*> line;
   std::vector<size_t> rack_position;  // line position of racks[i]
+  // FoE files of ESI devices whose ESI announces FoE (docs/LINE.md "FoE"): declared before
+  // the devices, which refer to them, so they outlive them.
+  std::vector<std::unique_ptr<device::FoeFiles>> foe_files;
   std::vector<std::unique_ptr<device::GenericDevice>> generics;
   std::vector<modules::ControlSlave> controlled;  // the control API's slaves, in line order
   std::vector<std::unique_ptr<GenericIoDevice>> io_devices;
@@ -131,6 +135,21 @@ int run(const RunArgs& a) {
         auto& d = line_file->devices[i];
         if (d.esi) {
           generics.push_back(std::make_unique<device::GenericDevice>(std::move(*d.esi)));
+          if (generics.back()->esi().description.foe) {
+            // Its own file directory beneath the state directory, by line position.
+            foe_files.push_back(std::make_unique<device::FoeFiles>(
+                state->fd(), "esi-" + std::to_string(i),
+                a.foe_password.value_or(mdp::ControlModule{}.foe_password)));
+            if (!foe_files.back()->usable())
+              spdlog::warn(
+                  "rackcat: slave {}: FoE directory {}/esi-{} unusable; FoE requests "
+                  "are refused",
+                  i, state_dir, i);
+            generics.back()->serve_foe(*foe_files.back(),
+                                       {.max_name_length = 64,
+                                        .max_file_size = device::FoeFiles::kMaxFileBytes,
+                                        .transfer_timeout_ms = 10'000});
+          }
           at[i] = generics.back().get();
           line.push_back(generics.back().get());
           io_devices.push_back(std::make_unique<GenericIoDevice>(*generics.back()));

@@ -226,8 +226,8 @@ class Reader {
                                         mailbox.first_child().name() +
                                         "> is not supported (CoE only)");
     }
-    // FoE is announced in the SII (word 0x1C bit 3) as the ESI says; a device from its ESI
-    // serves CoE only, a FoE request gets the mailbox error "unsupported protocol".
+    // FoE is announced in the SII (word 0x1C bit 3) as the ESI says; `rackcat run` serves it
+    // from a directory of the device's own (GenericDevice::serve_foe, device/foe_files.hpp).
     d.foe = static_cast<bool>(mailbox.child("FoE"));
     if (auto eeprom = dev.child("Eeprom")) {
       if (auto cd = eeprom.child("ConfigData")) read_config_data(cd, d.config);

@@ -97,10 +97,32 @@ uint16_t GenericDevice::on_state_request(EsmState from, EsmState to) {
 void GenericDevice::on_state_changed(EsmState, EsmState to) {
   state_ = to;
   if (to == EsmState::Init && sdo_) sdo_->reset();
+  if (to == EsmState::Init && foe_) foe_->reset();
+}
+
+void GenericDevice::serve_foe(foe::FileBackend& files, foe::FoeLimits limits) {
+  if (esi_.description.foe) foe_ = std::make_unique<foe::FoeServer>(files, limits);
 }
 
 void GenericDevice::add_mailbox_protocols(ecat::MailboxServer& server) {
   server.add(mailbox::Type::CoE, coe_mailbox_);
+  if (foe_)
+    server.add(mailbox::Type::FoE, foe_mailbox_,
+               ecat::MailboxServer::kMailboxStates | ecat::MailboxServer::kBoot);
+}
+
+mailbox::Answer GenericDevice::FoeMailbox::on_request(const ecat::MailboxRequest& request,
+                                                      std::span<uint8_t> reply) {
+  // The FoE part of the mailbox data (ETG.1000.6 §5.8); the firmware frames the reply.
+  if (reply.size() < foe::FoeHeader::kSize) return {0, mailbox::Error::NoMoreMemory};
+  const auto r = device.foe_->handle(request.data, request.capacity, reply);
+  if (r.too_short) return {0, mailbox::Error::SizeTooShort};
+  return {r.length, mailbox::Error::None};
+}
+
+size_t GenericDevice::FoeMailbox::poll(std::span<uint8_t>) {
+  device.foe_->tick();
+  return 0;
 }
 
 mailbox::Answer GenericDevice::CoeMailbox::on_request(const ecat::MailboxRequest& request,

@@ -17,6 +17,7 @@
 #include "device/esi_device.hpp"
 #include "ecat/application.hpp"
 #include "ecat/slave/mailbox_protocol.hpp"
+#include "foe/foe_server.hpp"
 
 namespace rackcat::device {
 
@@ -44,11 +45,20 @@ class GenericDevice final : public ecat::Application {
   // allocate. Call before the line runs.
   void add_input_driver(size_t to_bit, size_t bits, std::function<uint64_t()> code);
 
+  // Serves FoE (ETG.1000.6 §5.8) from `files` in every mailbox state and BOOT, when the ESI
+  // announces it (<Mailbox><FoE/>, SII word 0x1C bit 3); without this call a FoE request gets
+  // the mailbox error "unsupported protocol". `files` must outlive the device; call before the
+  // line runs (add_mailbox_protocols).
+  void serve_foe(foe::FileBackend& files, foe::FoeLimits limits = {});
+  bool serves_foe() const { return foe_ != nullptr; }
+
   std::span<const uint8_t> eeprom() const override { return sii_; }
   uint16_t on_state_request(EsmState from, EsmState to) override;
   void on_state_changed(EsmState from, EsmState to) override;
   void add_mailbox_protocols(ecat::MailboxServer& server) override;
-  bool mailbox_pending() const override { return sdo_ && sdo_->has_pending(); }
+  bool mailbox_pending() const override {
+    return (sdo_ && sdo_->has_pending()) || (foe_ && !foe_->idle());
+  }
   void update_inputs(std::span<uint8_t> inputs) override;
   void on_outputs(std::span<const uint8_t> outputs) override;
   void on_watchdog_expired() override;
@@ -68,6 +78,16 @@ class GenericDevice final : public ecat::Application {
     GenericDevice& device;
   };
   CoeMailbox coe_mailbox_{*this};
+  std::unique_ptr<foe::FoeServer> foe_;
+  // The FoE server as the firmware's FoE mailbox protocol.
+  struct FoeMailbox final : ecat::MailboxProtocol {
+    explicit FoeMailbox(GenericDevice& d) : device(d) {}
+    mailbox::Answer on_request(const ecat::MailboxRequest& request,
+                               std::span<uint8_t> reply) override;
+    size_t poll(std::span<uint8_t> reply) override;
+    GenericDevice& device;
+  };
+  FoeMailbox foe_mailbox_{*this};
   ecat::ProcessDataSizes sizes_;
   mutable std::mutex mutex_;  // guards outputs_/inputs_ against the control side
   std::vector<uint8_t> outputs_;

@@ -361,3 +361,54 @@ def test_every_device_of_the_line_is_reachable_through_the_control_api(ecat_segm
     finally:
         master.close()
     assert slave.stop() == 0, slave.log()
+
+
+FOE_PASSWORD = 0x52434657  # rackcat's default FoE password ("RCFW", docs/FOE.md)
+FOE_TIMEOUT_US = 10_000_000  # per mailbox step; generous: the machine is shared
+
+
+def test_foe_on_an_esi_device(ecat_segment, tmp_path):
+    """An ESI device whose ESI says <Mailbox><FoE/> (RC5002) serves FoE from its own directory
+    beneath the state directory (esi-<position>): pysoem's foe_write of a file over several
+    mailbox packets, foe_read gives it back byte for byte, and it is on disk there; a wrong
+    password, a bad name and a link planted in the directory are refused, and the link's target
+    is never read."""
+    work = tmp_path / "line"
+    work.mkdir()
+    shutil.copy(DATA / "rackcat-test-devices.xml", work)
+    (work / "line.yaml").write_text(
+        "devices:\n  - {esi: rackcat-test-devices.xml, device: RC5002, modules: [RM-DI4]}\n")
+    state = tmp_path / "state"
+    secret = tmp_path / "secret.txt"
+    secret.write_bytes(b"not for the master")
+    q = shlex.quote
+    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --line {q(str(work / 'line.yaml'))} "
+           f"--no-control --no-pty --state-dir {q(str(state))}")
+    iface, slave = ecat_segment(slaves=1, cmd=cmd, pcap=False)
+    master = pysoem.Master()
+    master.open(iface)
+    try:
+        assert master.config_init() == 1
+        dev = master.slaves[0]
+        data = bytes(range(256)) * 3  # 768 bytes: several packets through 128-byte mailboxes
+        assert dev.foe_write("params.bin", FOE_PASSWORD, data, FOE_TIMEOUT_US) > 0, slave.log()
+        assert dev.foe_read("params.bin", FOE_PASSWORD, 4096, FOE_TIMEOUT_US) == data
+        assert (state / "esi-0" / "params.bin").read_bytes() == data
+        # Refusals: each an FoE error, nothing written.
+        for name, password in (("other.bin", FOE_PASSWORD + 1), ("../escape", FOE_PASSWORD)):
+            try:
+                ok = dev.foe_write(name, password, b"x", FOE_TIMEOUT_US) > 0
+            except (pysoem.WkcError, pysoem.MailboxError):
+                ok = False
+            assert not ok, name
+        assert sorted(p.name for p in (state / "esi-0").iterdir()) == ["params.bin"]
+        (state / "esi-0" / "link.bin").symlink_to(secret)
+        try:
+            got = dev.foe_read("link.bin", FOE_PASSWORD, 4096, FOE_TIMEOUT_US)
+        except (pysoem.WkcError, pysoem.MailboxError):
+            got = None
+        assert got != secret.read_bytes()
+        assert dev.foe_read("params.bin", FOE_PASSWORD, 4096, FOE_TIMEOUT_US) == data
+    finally:
+        master.close()
+    assert slave.stop() == 0, slave.log()

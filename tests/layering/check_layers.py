@@ -2,7 +2,7 @@
 """Fails when a source file includes a layer it must not (README "A tour of the folders").
 
 Layers, top to bottom:  apps -> ecat, esi, modules, device -> mdp -> coe, foe -> base
-(device/ serves any device from its ESI: coe, esi and the ecat::Application seam only).
+(device/ serves any device from its ESI: coe, foe, esi and the ecat::Application seam only).
 Inside ecat/ the firmware (ecat/slave) and the LAN9252 access (ecat/lan9252) see the chip only
 through the PDI port (ecat/pdi_port.hpp), never the chip's internals (ecat/esc) or the host
 I/O (ecat/host); the chip knows nothing of the firmware.
@@ -48,7 +48,7 @@ RULES = {
     "ecat/lan9252": BASE + ECAT_PORT + ["ecat/lan9252/"],
     "ecat/host": ECAT,
     # Any device from its vendor ESI, served as an ecat::Application (like apps/rack_slave).
-    "device": COE + ["esi/"] + ECAT_DEVICE_SEAM,
+    "device": COE + ["esi/", "foe/"] + ECAT_DEVICE_SEAM,
     "apps/rack_slave": MDP + ["ecat/", "esi/", "modules/", "apps/rack_slave/"],
     "apps": MDP + ["ecat/", "esi/", "modules/", "device/", "apps/"],
     # Tests and benchmarks of a layer see that layer and what it may see, plus their own folder.
@@ -59,7 +59,7 @@ RULES = {
     "tests/ecat": ECAT + ["tests/ecat/", "tests/support/"],
     "tests/ecat_wire_slave": ECAT + ["tests/ecat_wire_slave/", "tests/ecat/"],
     "tests/modules": MDP + ["modules/", "tests/modules/", "tests/support/"],
-    "tests/device": COE + ["esi/", "ecat/", "device/", "tests/device/", "tests/support/"],
+    "tests/device": COE + ["esi/", "ecat/", "foe/", "device/", "tests/device/", "tests/support/"],
     "tests/apps": MDP + ["ecat/", "esi/", "modules/", "device/", "apps/rack_slave/", "apps/line/",
                         "tests/"],
     "tests/can_vm": MDP + ["modules/", "tests/can_vm/", "tests/support/"],
