@@ -26,7 +26,7 @@ Esc::Esc(SiiEeprom& eeprom, const Clock& clock, EscOptions options)
 }
 
 void Esc::power_on_reset() {
-  mem_.fill(0);
+  mem_.reset();  // registers zero, process RAM back to the kernel (reads 0)
   // Identification (read-only).
   mem_[reg::kType] = options_.type;
   mem_[reg::kRevision] = options_.revision;

@@ -1,9 +1,9 @@
 // One emulated EtherCAT slave controller (ESC), ET1100-class: the chip only. A 64 KiB address
-// space with the registers 0x0000-0x0FFF behaving as ETG.1000.4 §6 and the Beckhoff ESC
-// datasheet (section II) describe them, process RAM 0x1000-0xFFFF, 16 FMMUs, 16 SyncManagers,
-// the SII EEPROM interface, distributed clocks with SYNC0/SYNC1, the process-data watchdog,
-// the datagram engine on the EtherCAT side and the PDI on the other (pdi_read/pdi_write, the
-// IRQ line). docs/ESC.md is the one-page register model.
+// space (EscMemory: backed only where written) with the registers 0x0000-0x0FFF behaving as
+// ETG.1000.4 §6 and the Beckhoff ESC datasheet (section II) describe them, process RAM
+// 0x1000-0xFFFF, 16 FMMUs, 16 SyncManagers, the SII EEPROM interface, distributed clocks with
+// SYNC0/SYNC1, the process-data watchdog, the datagram engine on the EtherCAT side and the PDI on
+// the other (pdi_read/pdi_write, the IRQ line). docs/ESC.md is the one-page register model.
 //
 // The chip knows no AL state: AL control 0x0120 is a register the master writes (raising AL
 // event request 0x0220 bit 0), AL status 0x0130/0x0134 are registers the firmware writes
@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "ecat/clock.hpp"
+#include "ecat/esc/esc_memory.hpp"
 
 namespace rackcat::ecat {
 
@@ -58,7 +59,7 @@ class SiiEeprom {
 
 class Esc {
  public:
-  static constexpr size_t kMemorySize = 0x10000;
+  static constexpr size_t kMemorySize = EscMemory::kSize;
   static constexpr int kFmmus = 16;
   static constexpr int kSyncManagers = 16;
 
@@ -130,7 +131,7 @@ class Esc {
   uint64_t local_time(uint64_t clock_ns) const;
   uint64_t system_time(uint64_t clock_ns) const;
   // Raw view of the address space, no side effects (what a PDI read of the registers shows).
-  std::span<const uint8_t, kMemorySize> memory() const { return mem_; }
+  std::span<const uint8_t, kMemorySize> memory() const { return mem_.view(); }
   uint8_t read8(uint16_t address) const { return mem_[address]; }
   uint16_t read16(uint16_t address) const;
   uint32_t read32(uint16_t address) const;
@@ -217,7 +218,7 @@ class Esc {
   SiiEeprom& eeprom_;
   const Clock& clock_;
   EscOptions options_;
-  std::array<uint8_t, kMemorySize> mem_{};
+  EscMemory mem_;  // registers and process RAM, resident as far as used (esc_memory.hpp)
   std::vector<uint8_t> sii_;
   PassTimes pass_{};
 
