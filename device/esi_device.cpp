@@ -221,10 +221,11 @@ class Reader {
       d.coe.segmented_sdo = flag("SegmentedSdo", true);
     } else {
       d.coe = esi::CoeDetails{false, false, false, false, false, false, false};
-      if (mailbox && mailbox.first_child())
-        fail(mailbox.first_child(), std::string("mailbox protocol <") +
-                                        mailbox.first_child().name() +
-                                        "> is not supported (CoE only)");
+      // A mailbox device without CoE may serve FoE (ETG.1000.6 §5.8); nothing else.
+      for (auto p : mailbox.children())
+        if (std::string_view(p.name()) != "FoE")
+          fail(p, std::string("mailbox protocol <") + p.name() +
+                      "> is not supported (CoE and FoE only)");
     }
     // FoE is announced in the SII (word 0x1C bit 3) as the ESI says; `rackcat run` serves it
     // from a directory of the device's own (GenericDevice::serve_foe, device/foe_files.hpp).

@@ -105,7 +105,7 @@ void GenericDevice::serve_foe(foe::FileBackend& files, foe::FoeLimits limits) {
 }
 
 void GenericDevice::add_mailbox_protocols(ecat::MailboxServer& server) {
-  server.add(mailbox::Type::CoE, coe_mailbox_);
+  if (sdo_) server.add(mailbox::Type::CoE, coe_mailbox_);
   if (foe_)
     server.add(mailbox::Type::FoE, foe_mailbox_,
                ecat::MailboxServer::kMailboxStates | ecat::MailboxServer::kBoot);

@@ -277,6 +277,15 @@ TEST(EsiDeviceErrors, ModuleOfAnotherClassInASlotGroup) {
                       "RC5002");
 }
 
+// A mailbox device with FoE and no CoE (RC6001): accepted, the SII announces FoE only.
+TEST(EsiDevice, FoeWithoutCoe) {
+  const auto dev = load("RC6001");
+  EXPECT_FALSE(dev.has_coe);
+  EXPECT_TRUE(dev.description.foe);
+  const auto img = esi::encode_sii(dev.description).bytes;
+  EXPECT_EQ(img[0x1C * 2] | (img[0x1C * 2 + 1] << 8), 0x0008);
+}
+
 TEST(EsiDeviceErrors, NotXml) {
   expect_error("<EtherCATInfo>\n<Vendor>", 2, "not well-formed");
 }

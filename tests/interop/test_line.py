@@ -368,8 +368,9 @@ FOE_TIMEOUT_US = 10_000_000  # per mailbox step; generous: the machine is shared
 
 
 def test_foe_on_an_esi_device(ecat_segment, tmp_path):
-    """An ESI device whose ESI says <Mailbox><FoE/> (RC5002) serves FoE from its own directory
-    beneath the state directory (esi-<position>): pysoem's foe_write of a file over several
+    """ESI devices whose ESI says <Mailbox><FoE/> (RC5002 with CoE, RC6001 without) serve FoE
+    from their own directory beneath the state directory (esi-<position>): pysoem's foe_write of
+    a file over several
     mailbox packets, foe_read gives it back byte for byte, and it is on disk there; a wrong
     password, a bad name and a link planted in the directory are refused, and the link's target
     is never read."""
@@ -377,23 +378,28 @@ def test_foe_on_an_esi_device(ecat_segment, tmp_path):
     work.mkdir()
     shutil.copy(DATA / "rackcat-test-devices.xml", work)
     (work / "line.yaml").write_text(
-        "devices:\n  - {esi: rackcat-test-devices.xml, device: RC5002, modules: [RM-DI4]}\n")
+        "devices:\n  - {esi: rackcat-test-devices.xml, device: RC5002, modules: [RM-DI4]}\n"
+        "  - {esi: rackcat-test-devices.xml, device: RC6001}\n")
     state = tmp_path / "state"
     secret = tmp_path / "secret.txt"
     secret.write_bytes(b"not for the master")
     q = shlex.quote
     cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --line {q(str(work / 'line.yaml'))} "
            f"--no-control --no-pty --state-dir {q(str(state))}")
-    iface, slave = ecat_segment(slaves=1, cmd=cmd, pcap=False)
+    iface, slave = ecat_segment(slaves=2, cmd=cmd, pcap=False)
     master = pysoem.Master()
     master.open(iface)
     try:
-        assert master.config_init() == 1
+        assert master.config_init() == 2
+        # RC6001 has FoE and no CoE: its SII announces FoE only (word 0x1C bit 3).
+        assert int.from_bytes(master.slaves[1].eeprom_read(0x1C)[:2], "little") == 0x0008
+        for pos, dev in enumerate(master.slaves):
+            data = bytes(range(256)) * 3 + bytes([pos])  # several packets, 128-byte mailboxes
+            assert dev.foe_write("params.bin", FOE_PASSWORD, data, FOE_TIMEOUT_US) > 0, slave.log()
+            assert dev.foe_read("params.bin", FOE_PASSWORD, 4096, FOE_TIMEOUT_US) == data
+            assert (state / f"esi-{pos}" / "params.bin").read_bytes() == data
         dev = master.slaves[0]
-        data = bytes(range(256)) * 3  # 768 bytes: several packets through 128-byte mailboxes
-        assert dev.foe_write("params.bin", FOE_PASSWORD, data, FOE_TIMEOUT_US) > 0, slave.log()
-        assert dev.foe_read("params.bin", FOE_PASSWORD, 4096, FOE_TIMEOUT_US) == data
-        assert (state / "esi-0" / "params.bin").read_bytes() == data
+        data = bytes(range(256)) * 3 + bytes([0])
         # Refusals: each an FoE error, nothing written.
         for name, password in (("other.bin", FOE_PASSWORD + 1), ("../escape", FOE_PASSWORD)):
             try:
