@@ -24,7 +24,7 @@ if [ ! -f "$BUILD/compile_commands.json" ]; then
   exit 2
 fi
 
-mapfile -t files < <(find coe foe ecat mdp modules esi apps -name '*.cpp' -type f | sort)
+mapfile -t files < <(find coe foe ecat mdp modules esi device apps -name '*.cpp' -type f | sort)
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 started=$(date +%s)

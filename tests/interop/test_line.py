@@ -273,6 +273,20 @@ def test_check_validates_line_and_eni_like_run(tmp_path):
         assert res.returncode == 2, res
         assert res.stderr.strip() == (f"{work / 'line.yaml'}:8: wire reads output bits 0..8 but "
                                       "the device has 8 output bits"), res.stderr
+    # An ENI whose CoE init commands the device would refuse (TxPDO 0x1A05 assigned, which
+    # RC3102 lacks): the SDO abort the master would meet, at that init command's line.
+    text = eni.read_text()
+    bad_eni = work / "bad.eni.xml"
+    bad_eni.write_text(text.replace("<SubIndex>1</SubIndex><Data>001a</Data>",
+                                    "<SubIndex>1</SubIndex><Data>051a</Data>"))
+    line_no = text[:text.index("download pdo 0x1C13:01")].count("\n") + 1
+    res = subprocess.run([rackcat, "check", "--eni", str(bad_eni), "--esi-dir", str(work)],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2, res
+    assert res.stderr.strip() == (
+        f"{bad_eni}:{line_no}: InitCmd writes 0x1C13:1 but RC3102 "
+        f"({work / 'rackcat-test-devices.xml'}) answers SDO abort 0x06020000 (The object does "
+        "not exist in the object dictionary)"), res.stderr
 
 
 def test_every_device_of_the_line_is_reachable_through_the_control_api(ecat_segment, tmp_path):
