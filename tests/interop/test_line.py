@@ -8,6 +8,7 @@ import concurrent.futures
 import json
 import shlex
 import shutil
+import struct
 import subprocess
 import time
 import xml.etree.ElementTree as ET
@@ -429,6 +430,28 @@ def test_foe_on_an_esi_device(ecat_segment, tmp_path):
             got = None
         assert got != secret.read_bytes()
         assert dev.foe_read("params.bin", FOE_PASSWORD, 4096, FOE_TIMEOUT_US) == data
+        # RC6001 has a bootstrap mailbox (Eeprom/BootStrap): FoE in BOOT too, as SOEM's
+        # firm_update does it (INIT, SM0/SM1 from SII words 0x14-0x17, BOOT, foe_write, INIT).
+        boot = master.slaves[1]
+        boot.state = pysoem.INIT_STATE
+        boot.write_state()
+        assert boot.state_check(pysoem.INIT_STATE, 3_000_000) == pysoem.INIT_STATE
+        rx_off, rx_len = struct.unpack("<HH", boot.eeprom_read(pysoem.SiiOffset.BOOT_RX_MBX))
+        tx_off, tx_len = struct.unpack("<HH", boot.eeprom_read(pysoem.SiiOffset.BOOT_TX_MBX))
+        assert (rx_off, rx_len, tx_off, tx_len) == (0x1000, 256, 0x1200, 256)
+        boot.amend_mbx(mailbox="out", start_address=rx_off, size=rx_len)
+        boot.amend_mbx(mailbox="in", start_address=tx_off, size=tx_len)
+        boot.state = pysoem.BOOT_STATE
+        boot.write_state()
+        assert boot.state_check(pysoem.BOOT_STATE, 3_000_000) == pysoem.BOOT_STATE, \
+            f"AL status 0x{boot.al_status:04X}"
+        image = bytes(range(251, -1, -1)) * 4  # 1008 bytes through 256-byte mailboxes
+        assert boot.foe_write("image.bin", FOE_PASSWORD, image, FOE_TIMEOUT_US) > 0, slave.log()
+        assert boot.foe_read("image.bin", FOE_PASSWORD, 4096, FOE_TIMEOUT_US) == image
+        assert (state / "esi-1" / "image.bin").read_bytes() == image
+        boot.state = pysoem.INIT_STATE
+        boot.write_state()
+        assert boot.state_check(pysoem.INIT_STATE, 3_000_000) == pysoem.INIT_STATE
     finally:
         master.close()
     assert slave.stop() == 0, slave.log()
