@@ -4,6 +4,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "base/little_endian.hpp"
+
 namespace rackcat::ecat {
 
 Segment::Slave::Slave(Application& app, const Clock& clock, const EscOptions& options,
@@ -26,7 +28,7 @@ PdiPort& Segment::Slave::make_pdi(PdiAccess access) {
 }
 
 Segment::Segment(std::vector<Application*> applications, const Clock& clock, SegmentOptions options)
-    : clock_(clock), options_(options) {
+    : clock_(clock), options_(options), logical_map_(applications.size(), Esc::kFmmus) {
   if (applications.empty()) throw std::invalid_argument("a segment needs at least one slave");
   const size_t n = applications.size();
   slaves_.reserve(n);
@@ -37,6 +39,7 @@ Segment::Segment(std::vector<Application*> applications, const Clock& clock, Seg
     slaves_.push_back(std::make_unique<Slave>(*applications[k], clock_, esc, options_.pdi));
     slaves_[k]->esc().set_port1_link(k + 1 < n);
     slaves_[k]->esc().set_next_event_bound(&next_event_bound_);
+    slaves_[k]->esc().set_fmmu_generation(&fmmu_generation_);
   }
   // Arrival at port 0 of slave k, and the time the frame takes from entering slave k at port 0
   // to leaving it at port 0 again (through everything behind it).
@@ -67,12 +70,29 @@ size_t Segment::process(std::span<uint8_t> frame) {
   const uint64_t t0 = clock_.now_ns();
   if (t0 >= next_event_bound_) service_at(t0);
   uint8_t* base = frame.data();
+  bool mapped = resolve_logical(base);
   for (size_t k = 0; k < slaves_.size(); ++k) {
     Slave& slave = *slaves_[k];
     Esc& esc = slave.esc();
     esc.begin_frame({t0 + offsets_[k].port0_ns, t0 + offsets_[k].port1_ns});
     for (size_t d = 0; d < layout_.count; ++d) {
-      esc.process_datagram(base + layout_.offset[d], layout_.length[d]);
+      uint8_t* datagram = base + layout_.offset[d];
+      if (mapped && targets_[d] != nullptr) {
+        // Targets are in line order, one per slave: the next one is this slave or a later one.
+        const std::vector<LogicalMap::Target>& t = *targets_[d];
+        uint32_t& next = next_target_[d];
+        if (next < t.size() && t[next].slave == k) {
+          esc.process_logical_datagram(datagram, layout_.length[d], t[next].fmmus);
+          ++next;
+        } else {
+          esc.pass_datagram(datagram);
+        }
+      } else {
+        esc.process_datagram(datagram, layout_.length[d]);
+      }
+      // A datagram that changed an FMMU (0x0600-0x06FF, an ESC reset) makes the map stale:
+      // the rest of this frame is handled by every ESC's own FMMU walk.
+      if (mapped && fmmu_generation_ != map_generation_) mapped = false;
     }
     if (layout_.malformed) esc.count_frame_error();
     // The frame has left this ESC: its firmware runs in after_frame(), once the reply is out.
@@ -80,6 +100,42 @@ size_t Segment::process(std::span<uint8_t> frame) {
     if (!esc.forwards_to_port1()) break;  // last slave, or loop closed by DL control
   }
   return frame.size();
+}
+
+bool Segment::resolve_logical(const uint8_t* base) {
+  bool any = false;
+  size_t resolved = 0;
+  for (size_t d = 0; d < layout_.count; ++d) {
+    const uint8_t* datagram = base + layout_.offset[d];
+    const auto cmd = static_cast<Command>(datagram[0]);
+    targets_[d] = nullptr;
+    if (cmd != Command::Lrd && cmd != Command::Lwr && cmd != Command::Lrw) continue;
+    if (!any) {
+      if (map_generation_ != fmmu_generation_) rebuild_logical_map();
+      logical_map_.begin_frame();
+      any = true;
+    }
+    // More distinct logical datagrams than the map keeps per frame: the rest walk the FMMUs.
+    if (resolved == LogicalMap::kCachedRanges) continue;
+    targets_[d] = logical_map_.resolve(le::get32(datagram + 2), layout_.length[d]);
+    next_target_[d] = 0;
+    if (targets_[d] != nullptr) ++resolved;
+  }
+  return any;
+}
+
+void Segment::rebuild_logical_map() {
+  logical_map_.clear();
+  std::array<Esc::FmmuRange, Esc::kFmmus> ranges{};
+  for (size_t k = 0; k < slaves_.size(); ++k) {
+    const size_t n = slaves_[k]->esc().fmmu_ranges(ranges);
+    for (size_t i = 0; i < n; ++i) {
+      logical_map_.add(static_cast<uint32_t>(k), ranges[i].first_bit, ranges[i].last_bit,
+                       ranges[i].index);
+    }
+  }
+  logical_map_.finish();
+  map_generation_ = fmmu_generation_;
 }
 
 void Segment::after_frame() {

@@ -4,7 +4,8 @@
 // and the device (Application). The firmware runs between frames and at timer events, as a
 // microcontroller does between the frames its ESC processes. Timers (SYNC0/1, watchdogs) are
 // scheduled through one next-event bound for the whole line, not by a walk over every ESC per
-// frame (next_event_bound_ns()).
+// frame (next_event_bound_ns()). Logical datagrams (LRD/LWR/LRW) go only to the ESCs whose
+// FMMUs meet them, found in the line's logical-address map (logical_map.hpp).
 //
 // Typical use by a link:
 //   rackcat::ecat::Segment segment({&device_a, &device_b});
@@ -15,6 +16,7 @@
 // (the link's event loop); other threads post work to it.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -28,6 +30,7 @@
 #include "ecat/esc/lan9252_model.hpp"
 #include "ecat/frame.hpp"
 #include "ecat/lan9252/lan9252_pdi.hpp"
+#include "ecat/logical_map.hpp"
 #include "ecat/slave/esm_event_log.hpp"
 #include "ecat/slave/firmware.hpp"
 
@@ -99,7 +102,8 @@ class Segment {
   // outlive the segment. At least one slave.
   explicit Segment(std::vector<Application*> applications,
                    const Clock& clock = SteadyClock::instance(), SegmentOptions options = {});
-  // The ESCs keep a pointer to the segment's next-event bound: not copyable, not movable.
+  // The ESCs keep pointers to the segment's next-event bound and FMMU generation: not
+  // copyable, not movable.
   Segment(const Segment&) = delete;
   Segment& operator=(const Segment&) = delete;
 
@@ -108,8 +112,10 @@ class Segment {
   // 0x02 of the first source-MAC byte set), 0 for frames the ESCs do not answer (other
   // EtherTypes, runts). Malformed EtherCAT frames never crash: complete datagrams before the
   // defect are processed, the rest passes unchanged and every slave counts a frame error.
-  // Allocates nothing. Fires due SYNC events and watchdogs first when the next-event bound
-  // has come (see service()).
+  // Logical datagrams are handed to the ESCs the logical-address map names (rebuilt first when
+  // an FMMU changed; a frame that changes an FMMU finishes with every ESC walking its own
+  // FMMUs, as the map is stale from there on). Allocates nothing. Fires due SYNC events and
+  // watchdogs first when the next-event bound has come (see service()).
   size_t process(std::span<uint8_t> frame);
   // The firmware of every slave the last frame passed runs here, after its reply has left
   // (the event loop calls it once the frame is sent), for those slaves whose firmware has
@@ -139,10 +145,15 @@ class Segment {
   Slave& slave(size_t position) { return *slaves_.at(position); }
   const Slave& slave(size_t position) const { return *slaves_.at(position); }
   const Clock& clock() const { return clock_; }
+  // The line's logical-address map as last built (tests).
+  const LogicalMap& logical_map() const { return logical_map_; }
 
  private:
   void service_slave(Slave& s, uint64_t now);
   void service_at(uint64_t now);  // every slave, then the exact next-event bound
+  void rebuild_logical_map();
+  // Resolves the frame's logical datagrams through the map; false when it has none.
+  bool resolve_logical(const uint8_t* base);
   const Clock& clock_;
   SegmentOptions options_;
   std::vector<std::unique_ptr<Slave>> slaves_;
@@ -150,6 +161,14 @@ class Segment {
   uint64_t next_event_bound_ = 0;   // <= every slave's next timer event (0: walk at once)
   std::vector<PassTimes> offsets_;  // per slave, relative to the frame's arrival at slave 0
   FrameLayout layout_;
+  // Logical addressing: ESCs bump fmmu_generation_ when an FMMU may have changed; the map was
+  // built for map_generation_. Per datagram of the current frame: its targets (nullptr: not a
+  // logical datagram resolved through the map) and the next target not yet reached.
+  LogicalMap logical_map_;
+  uint32_t fmmu_generation_ = 0;
+  uint32_t map_generation_ = ~0u;
+  std::array<const std::vector<LogicalMap::Target>*, FrameLayout::kMaxDatagrams> targets_{};
+  std::array<uint32_t, FrameLayout::kMaxDatagrams> next_target_{};
 };
 
 }  // namespace rackcat::ecat

@@ -69,7 +69,8 @@ void Esc::power_on_reset() {
     mem_[reg::kSm + reg::kSmSize * i + reg::kSmStatusOffset] = 0x30;  // no buffer written
   }
   fmmu_.fill(FmmuState{});
-  fmmu_active_count_ = 0;
+  fmmu_active_mask_ = 0;
+  if (fmmu_generation_ != nullptr) ++*fmmu_generation_;
 
   sii_reload_config_area();
   set_port1_link(port1_link_);
@@ -150,7 +151,7 @@ void Esc::process_datagram(uint8_t* datagram, uint16_t data_len) {
     case Command::Lrd:
     case Command::Lwr:
     case Command::Lrw:
-      wkc = process_logical(command, le::get32(datagram + 2), data, data_len);
+      wkc = process_logical(command, le::get32(datagram + 2), data, data_len, fmmu_active_mask_);
       break;
     default:
       break;  // reserved command: the ESC forwards the datagram untouched
@@ -159,7 +160,16 @@ void Esc::process_datagram(uint8_t* datagram, uint16_t data_len) {
     uint8_t* counter = data + data_len;
     le::put16(counter, static_cast<uint16_t>(le::get16(counter) + wkc));
   }
-  // IRQ field: ECAT event request ANDed with the ECAT event mask, ORed in by every slave.
+  or_irq(datagram);
+}
+
+void Esc::pass_datagram(uint8_t* datagram) const {
+  or_irq(datagram);
+}
+
+void Esc::or_irq(uint8_t* datagram) const {
+  // IRQ field: ECAT event request ANDed with the ECAT event mask, ORed in by every slave
+  // (ETG.1000.4 §5.4, Table 12 "IRQ").
   const uint16_t events =
       le::get16(&mem_[reg::kEcatEventRequest]) & le::get16(&mem_[reg::kEcatEventMask]);
   if (events != 0) le::put16(datagram + 8, le::get16(datagram + 8) | events);

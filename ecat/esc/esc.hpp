@@ -79,9 +79,33 @@ class Esc {
   // data and working counter are updated in place per ETG.1000.4 §5.4. The IRQ field is ORed
   // with this ESC's masked ECAT event request (0x0210 & 0x0200).
   void process_datagram(uint8_t* datagram, uint16_t data_len);
+  // A logical datagram (LRD, LWR, LRW) handled through the FMMUs in `fmmus` only (bit n =
+  // FMMU n): those the segment's logical-address map found inside the datagram's range
+  // (ecat/logical_map.hpp). Working counter and IRQ field as process_datagram; FMMUs that are
+  // no longer activated are skipped.
+  void process_logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus);
+  // A datagram that does not address this ESC (a logical one none of its FMMUs meets) passing
+  // through: only the IRQ field is ORed with this ESC's masked ECAT events, as process_datagram
+  // does for every datagram.
+  void pass_datagram(uint8_t* datagram) const;
   // A frame this ESC could not parse (chain past the end, bad length): counts it in the
   // processing-unit and port-0 RX error counters (0x030C, 0x0300).
   void count_frame_error();
+
+  // ---- logical addressing: what the segment's map of the logical address space needs -------
+  // One activated FMMU (0x060C bit 0, read and/or write type): logical bits first..last
+  // (ETG.1000.4 §6.6: start address x 8 + start bit .. (start + length - 1) x 8 + stop bit).
+  struct FmmuRange {
+    uint64_t first_bit = 0;
+    uint64_t last_bit = 0;
+    uint8_t index = 0;  // FMMU n (0x0600 + 16n)
+  };
+  // The activated FMMUs with a non-empty logical range, in index order; returns how many.
+  size_t fmmu_ranges(std::span<FmmuRange, kFmmus> out) const;
+  // A counter kept by whoever maps the logical space of many ESCs (Segment): incremented
+  // whenever this ESC's FMMU set may have changed (a write to 0x0600-0x06FF, an ESC reset).
+  // nullptr (the default): nobody listens.
+  void set_fmmu_generation(uint32_t* counter) { fmmu_generation_ = counter; }
 
   // ---- timers: SYNC0/SYNC1 and the process-data watchdog -----------------------------------
   // Fires every SYNC event due at `now_ns` (clock time base) and expires the process-data
@@ -177,7 +201,9 @@ class Esc {
   void write_enables_written(uint16_t address, const uint8_t* src, uint16_t len);
   bool protected_write(uint16_t address, const uint8_t* src, uint16_t len);
   // fmmu.cpp: logical addressing.
-  uint8_t process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len);
+  uint8_t process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len,
+                          uint16_t fmmus);
+  void or_irq(uint8_t* datagram) const;
   bool fmmu_read(const FmmuState& f, uint64_t lo_bit, uint64_t hi_bit, uint64_t datagram_bit0,
                  uint8_t* data);
   bool fmmu_write(const FmmuState& f, uint64_t lo_bit, uint64_t hi_bit, uint64_t datagram_bit0,
@@ -226,8 +252,8 @@ class Esc {
   std::array<uint8_t, kSyncManagers> activate_seen_{};  // 0x0806+8n at the last reload
   uint16_t sm_enabled_mask_ = 0;
   std::array<FmmuState, kFmmus> fmmu_{};
-  std::array<uint8_t, kFmmus> fmmu_active_{};  // indices of activated FMMUs, in order
-  uint8_t fmmu_active_count_ = 0;
+  uint16_t fmmu_active_mask_ = 0;  // bit n: FMMU n activated with a read or write type
+  uint32_t* fmmu_generation_ = nullptr;
 
   bool port1_link_ = false;
   uint8_t reset_sequence_ = 0;           // 0x0040 'R','E','S' progress

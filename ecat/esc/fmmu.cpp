@@ -1,6 +1,7 @@
 // FMMUs: bit-granular mapping of the 4 GiB logical address space onto this ESC's physical
 // memory (ETG.1000.4 §6.6), and the logical datagrams LRD, LWR, LRW that use them.
 #include <algorithm>
+#include <bit>
 #include <cstring>
 
 #include "base/little_endian.hpp"
@@ -62,16 +63,43 @@ void Esc::reload_fmmu(int index) {
   f.physical_start = le::get16(p + 8);
   f.physical_start_bit = p[10] & 0x07;
   f.type = p[11] & 0x03;
-  fmmu_active_count_ = 0;
+  fmmu_active_mask_ = 0;
   for (int n = 0; n < kFmmus; ++n) {
     const uint8_t* q = &mem_[reg::kFmmu + reg::kFmmuSize * n];
-    if ((q[12] & 0x01) && (q[11] & 0x03))
-      fmmu_active_[fmmu_active_count_++] = static_cast<uint8_t>(n);
+    if ((q[12] & 0x01) && (q[11] & 0x03)) fmmu_active_mask_ |= static_cast<uint16_t>(1u << n);
   }
+  if (fmmu_generation_ != nullptr) ++*fmmu_generation_;  // the segment's map is stale
 }
 
-uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len) {
-  if (fmmu_active_count_ == 0 || len == 0) return 0;
+size_t Esc::fmmu_ranges(std::span<FmmuRange, kFmmus> out) const {
+  size_t n = 0;
+  for (uint16_t m = fmmu_active_mask_; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+    const int i = std::countr_zero(m);
+    const FmmuState& f = fmmu_[i];
+    if (f.length == 0) continue;
+    const uint64_t lo = static_cast<uint64_t>(f.logical_start) * 8 + f.logical_start_bit;
+    const uint64_t hi =
+        (static_cast<uint64_t>(f.logical_start) + f.length - 1) * 8 + f.logical_stop_bit;
+    if (hi < lo) continue;  // one byte whose stop bit lies before its start bit: maps nothing
+    out[n++] = FmmuRange{lo, hi, static_cast<uint8_t>(i)};
+  }
+  return n;
+}
+
+void Esc::process_logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus) {
+  uint8_t* data = datagram + kDatagramHeaderSize;
+  const uint8_t wkc = process_logical(datagram[0], le::get32(datagram + 2), data, data_len,
+                                      static_cast<uint16_t>(fmmus & fmmu_active_mask_));
+  if (wkc != 0) {
+    uint8_t* counter = data + data_len;
+    le::put16(counter, static_cast<uint16_t>(le::get16(counter) + wkc));
+  }
+  or_irq(datagram);
+}
+
+uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len,
+                             uint16_t fmmus) {
+  if (fmmus == 0 || len == 0) return 0;
   const auto cmd = static_cast<Command>(command);
   const bool may_read = cmd == Command::Lrd || cmd == Command::Lrw;
   const bool may_write = cmd == Command::Lwr || cmd == Command::Lrw;
@@ -82,8 +110,8 @@ uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, u
   // incoming bytes when this ESC both reads and writes inside the datagram.
   bool any_read = false;
   bool any_write = false;
-  for (uint8_t k = 0; k < fmmu_active_count_; ++k) {
-    const FmmuState& f = fmmu_[fmmu_active_[k]];
+  for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+    const FmmuState& f = fmmu_[std::countr_zero(m)];
     Span s;
     if (!intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit,
                    f.physical_start, f.physical_start_bit, dg_lo, dg_hi, s)) {
@@ -102,8 +130,8 @@ uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, u
   bool read_done = false;
   bool write_done = false;
   if (any_read) {
-    for (uint8_t k = 0; k < fmmu_active_count_; ++k) {
-      const FmmuState& f = fmmu_[fmmu_active_[k]];
+    for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+      const FmmuState& f = fmmu_[std::countr_zero(m)];
       if ((f.type & 0x01) == 0) continue;
       Span s;
       if (!intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit,
@@ -114,8 +142,8 @@ uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, u
     }
   }
   if (any_write) {
-    for (uint8_t k = 0; k < fmmu_active_count_; ++k) {
-      const FmmuState& f = fmmu_[fmmu_active_[k]];
+    for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+      const FmmuState& f = fmmu_[std::countr_zero(m)];
       if ((f.type & 0x02) == 0) continue;
       Span s;
       if (!intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit,
