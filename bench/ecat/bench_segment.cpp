@@ -32,6 +32,26 @@ void BM_CyclicLrwFrmw(benchmark::State& state) {
 }
 BENCHMARK(BM_CyclicLrwFrmw)->Arg(1)->Arg(16)->Unit(benchmark::kNanosecond);
 
+// One slave's outputs in a line of N in OP (an LWR that only the first slave's output FMMU
+// meets): what every other ESC spends on a logical datagram that is not theirs.
+void BM_LwrOneSlaveOfMany(benchmark::State& state) {
+  const auto n = static_cast<size_t>(state.range(0));
+  Line line(n, {}, &SteadyClock::instance());
+  line.to_op();
+  FrameBuilder b;
+  b.add_logical(Command::Lwr, 0, std::vector<uint8_t>(kOutputBytes, 0x5A));
+  const std::vector<uint8_t> frame = b.build();
+  std::vector<uint8_t> work = frame;
+  for (auto _ : state) {
+    std::memcpy(work.data(), frame.data(), frame.size());
+    benchmark::DoNotOptimize(line.segment->process(work));
+  }
+  const auto reply = decode(work);
+  if (reply.empty() || reply[0].wkc != 1) state.SkipWithError("unexpected LWR working counter");
+  state.counters["slaves"] = static_cast<double>(n);
+}
+BENCHMARK(BM_LwrOneSlaveOfMany)->Arg(16)->Arg(128)->Unit(benchmark::kNanosecond);
+
 void BM_Brd(benchmark::State& state) {
   const auto n = static_cast<size_t>(state.range(0));
   Line line(n, {}, &SteadyClock::instance());
