@@ -37,6 +37,7 @@
 #include "apps/rack_slave/rack_loading.hpp"
 #include "apps/rack_slave/rack_slave.hpp"
 #include "apps/slave_link.hpp"
+#include "base/background_thread.hpp"
 #include "device/foe_files.hpp"
 #include "device/generic_device.hpp"
 #include "ecat/host/runner.hpp"
@@ -305,6 +306,7 @@ int run(const RunArgs& a) {
   // The racks' own clock (guide §4.8: 0x2000:0F every 30 s in every ESM state, with or without
   // process data): once a second on the loop thread.
   std::jthread clock_thread([&runner, &racks](const std::stop_token& stop) {
+    (void)base::leave_real_time();  // a helper thread, not the device thread
     std::mutex m;
     std::condition_variable_any cv;
     std::unique_lock lock(m);

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string_view>
 
+#include "base/background_thread.hpp"
 #include "base/esm_state.hpp"
 #include "base/mailbox_error.hpp"
 #include "coe/abort_code.hpp"
@@ -218,6 +219,7 @@ EventLogger::~EventLogger() {
 }
 
 void EventLogger::run() {
+  (void)base::leave_real_time();  // a helper thread, not the device thread
   while (!stop_.load()) {
     drain();
     std::this_thread::sleep_for(std::chrono::milliseconds(20));

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "base/background_thread.hpp"
+
 namespace rackcat::mdp {
 
 BackgroundWorker& BackgroundWorker::shared() {
@@ -35,6 +37,7 @@ void BackgroundWorker::forget(Client& client) {
 }
 
 void BackgroundWorker::run() {
+  (void)base::leave_real_time();  // a helper thread, not the device thread
   std::unique_lock lock(mutex_);
   for (;;) {
     cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });

@@ -10,6 +10,8 @@
 #include <cerrno>
 #include <cstring>
 
+#include "base/background_thread.hpp"
+
 namespace rackcat::mdp {
 namespace {
 
@@ -123,6 +125,7 @@ FirmwareStore::Status FirmwareStore::poll_commit() const {
 }
 
 void FirmwareStore::commit(const Verifier& verify) {
+  (void)base::leave_real_time();  // a helper thread, not the device thread
   auto finish = [this](foe::FoeError e, std::string detail) {
     if (e != foe::FoeError::None) {
       close_tmp();

@@ -8,6 +8,8 @@
 #include <cstring>
 #include <ctime>
 
+#include "base/background_thread.hpp"
+
 namespace rackcat::ecat {
 namespace {
 
@@ -119,6 +121,7 @@ void PcapWriter::drain() {
 }
 
 void PcapWriter::run() {
+  (void)base::leave_real_time();  // a helper thread, not the device thread
   std::unique_lock lock(mutex_);
   for (;;) {
     cv_.wait_for(lock, kWritePeriod, [this] { return stop_ || flush_requested_; });

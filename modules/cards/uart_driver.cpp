@@ -12,6 +12,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "base/background_thread.hpp"
 #include "modules/cards/drivers.hpp"
 
 namespace rackcat::modules {
@@ -303,6 +304,7 @@ void UartDriver::stop_ptys() {
 // Moves bytes between the terminals and the FIFOs at the configured character rate: a token
 // bucket per direction and channel, refilled with baud / bits-per-character per second.
 void UartDriver::line_thread() {
+  (void)base::leave_real_time();  // a helper thread, not the device thread
   using clock = std::chrono::steady_clock;
   struct Bucket {
     double rx = 0, tx = 0;

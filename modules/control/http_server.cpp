@@ -17,6 +17,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "base/background_thread.hpp"
+
 namespace rackcat::modules {
 namespace {
 
@@ -308,6 +310,7 @@ bool HttpServer::on_readable(Connection& c) {
 }
 
 void HttpServer::io_loop() {
+  (void)base::leave_real_time();  // a helper thread, not the device thread
   std::vector<std::unique_ptr<Connection>> conns;
   std::vector<pollfd> fds;
   while (!stopping_.load()) {
@@ -369,6 +372,7 @@ void HttpServer::io_loop() {
 }
 
 void HttpServer::worker_loop() {
+  (void)base::leave_real_time();  // a helper thread, not the device thread
   for (;;) {
     std::pair<int, HttpRequest> job;
     {

@@ -2,7 +2,10 @@
 // 24-byte global header, 16-byte record headers), which Wireshark and tshark open.
 #include <gtest/gtest.h>
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -11,6 +14,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -144,6 +148,57 @@ TEST(LinkPcap, TheWriterThreadWritesWithoutFlush) {
   std::this_thread::sleep_for(PcapWriter::kWritePeriod * 5);
   EXPECT_EQ(read_file(path).size(), 24u + 10u * 76u);
   w.close();
+  std::remove(path.c_str());
+}
+
+// The scheduling policy (field 41 of /proc/self/task/TID/stat, proc(5)) of every thread of
+// this process except the calling one.
+std::vector<int> other_threads_policies() {
+  std::vector<int> policies;
+  const std::string self = std::to_string(gettid());
+  DIR* d = opendir("/proc/self/task");
+  if (d == nullptr) return policies;
+  while (const dirent* e = readdir(d)) {
+    const std::string tid = e->d_name;
+    if (tid == "." || tid == ".." || tid == self) continue;
+    std::ifstream f("/proc/self/task/" + tid + "/stat");
+    std::string line;
+    std::getline(f, line);
+    // the command name (field 2) is in parentheses and may hold spaces: count after it
+    const size_t close = line.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(line.substr(close + 2));
+    std::string field;
+    for (int n = 3; n <= 41 && rest >> field; ++n) {
+      if (n == 41) policies.push_back(std::stoi(field));
+    }
+  }
+  closedir(d);
+  return policies;
+}
+
+// rackcat runs under `chrt -f` and Linux threads inherit their creator's policy: the capture
+// writer must not keep SCHED_FIFO, or its megabyte writes hold the CPU the device thread
+// needs to answer the master within its timeout (base/background_thread.hpp).
+TEST(LinkPcap, TheWriterThreadLeavesTheRealTimeClass) {
+  sched_param rt{};
+  rt.sched_priority = 1;
+  if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &rt) != 0) {
+    GTEST_SKIP() << "needs permission for SCHED_FIFO (root or CAP_SYS_NICE)";
+  }
+  const auto path = temp_path("policy.pcap");
+  {
+    PcapWriter w(path);
+    w.start();
+    std::vector<uint8_t> frame(60, 0x22);
+    w.write(frame, 1);
+    ASSERT_TRUE(w.flush());  // the writer thread has run its first pass
+    const auto policies = other_threads_policies();
+    ASSERT_FALSE(policies.empty());
+    for (int p : policies) EXPECT_EQ(p, SCHED_OTHER);
+  }
+  sched_param normal{};
+  EXPECT_EQ(pthread_setschedparam(pthread_self(), SCHED_OTHER, &normal), 0);
   std::remove(path.c_str());
 }
 

@@ -189,10 +189,12 @@ def scenario(m, rec, exp):
         while_cycling(cycle, lambda: trigger(exp["emergency"]["raise"]))
         deadline = time.monotonic() + 3
         code = exp["emergency"]["code"]
+        # until SOEM reports an Emergency, paced like an application (soem_family.py)
         while code not in emcy and time.monotonic() < deadline:
             m.SDOread(1, 0x1018, 1, 0, 4, SDO_TIMEOUT_US)  # SOEM reads Emergencies meanwhile
             errors(m, emcy)
             cycle()
+            time.sleep(exp["cycle_us"] / 1e6)
         while_cycling(cycle, lambda: trigger(exp["emergency"]["clear"]))
         check(code in emcy, f"no Emergency 0x{code:04X}; got {[hex(c) for c in emcy]}")
         return f"0x{code:04X} from SOEM's error list"
