@@ -50,6 +50,42 @@ TEST(NoAllocation, CyclicFramesAllocateNothing) {
   EXPECT_GE(line.app(0).syncs.size(), 249u);
 }
 
+TEST(NoAllocation, LogicalMapRebuildsAndNewRangesAllocateNothing) {
+  // The logical-address map (ecat/logical_map.*) is rebuilt after FMMU writes and resolves new
+  // (address, length) pairs from storage reserved when the segment was built.
+  Line line(16);
+  line.to_op();
+  FrameBuilder disable;
+  disable.add(Command::Fpwr, Line::station(3), 0x060C, {0x00});
+  FrameBuilder enable;
+  enable.add(Command::Fpwr, Line::station(3), 0x060C, {0x01});
+  std::vector<std::vector<uint8_t>> frames = {disable.build(), enable.build()};
+  for (uint32_t a = 0; a < 12; ++a) {
+    FrameBuilder lrw;
+    lrw.add_logical(Command::Lrw, a,
+                    std::vector<uint8_t>(16 * (kOutputBytes + kInputBytes) - a, 0));
+    frames.push_back(lrw.build());
+  }
+  std::vector<std::vector<uint8_t>> work = frames;
+  // Warm-up: the test devices size their output copies at the first delivery.
+  for (size_t f = 0; f < frames.size(); ++f) {
+    line.segment->process(work[f]);
+    line.segment->after_frame();
+  }
+  if (!rackcat::testing::CountAllocations::available()) GTEST_SKIP() << "operator new is ASan's";
+  std::optional<rackcat::testing::CountAllocations> count(std::in_place);
+  for (int i = 0; i < 20; ++i) {
+    for (size_t f = 0; f < frames.size(); ++f) {
+      std::copy(frames[f].begin(), frames[f].end(), work[f].begin());
+      line.segment->process(work[f]);
+      line.segment->after_frame();
+    }
+  }
+  const size_t allocations = count->allocations();
+  count.reset();
+  EXPECT_EQ(allocations, 0u);
+}
+
 TEST(NoAllocation, MalformedFramesAllocateNothing) {
   Line line(4);
   auto bad = hex("ff ff ff ff ff ff 00 00 00 00 00 01 88 a4 70 10 02 01 00 00 80 0f 64 00 00 00");
