@@ -3,8 +3,8 @@
 // the kernel backs a page of it when the master or the firmware first writes there: a tiny
 // rack's ESC keeps its register page and the page with its mailbox and process-data
 // SyncManagers resident (8 KiB), not 64 KiB. Reads of RAM nobody wrote return 0, the content
-// this ESC model gives its process RAM at power-on (docs/ESC.md, 0x1000-0xFFFF "plain memory";
-// the Beckhoff ESC datasheet leaves it undefined, a real ET1100 reads what was last written).
+// this ESC model has always given its process RAM at power-on (docs/ESC.md, 0x1000-0xFFFF
+// "plain memory"); written bytes read back as written.
 //
 // Element access is a plain pointer: no check, no fault handling on the datagram path; the
 // page faults of a first write are the kernel's (once per page, not per frame).
