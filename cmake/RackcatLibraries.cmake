@@ -3,13 +3,23 @@
 # CMakeLists.txt). A library's own CMakeLists.txt only lists its sources and what it links.
 #
 # Each library target rackcat_<name> becomes:
-#  - include root: the repository root in the build tree, <prefix>/include/rackcat installed
-#    (sources write #include "coe/sdo_server.hpp" either way);
+#  - include root: in the build tree a view of its OWN headers only,
+#    build/include/rackcat_<name>/<folder>/<header> (symbolic links into the source tree), so
+#    sources still write #include "coe/sdo_server.hpp" but a target sees exactly the headers of
+#    itself and of the libraries it links (usage requirements are transitive): an #include of
+#    a layer the target does not link is "No such file or directory" at compile time. Installed,
+#    the root is <prefix>/include/rackcat, all headers (docs/ESC.md "Layers").
+#    A library's headers are the *.hpp of its folder; where one folder holds several libraries,
+#    all but one list theirs in the target property RACKCAT_HEADERS (file names; may be empty)
+#    and the one without it takes the rest;
 #  - the imported target rackcat::<name> and the package component <name>
 #    (find_package(rackcat COMPONENTS <name> ...)), installed as lib/librackcat_<name>.a with
 #    lib/cmake/rackcat/rackcat-<name>-targets.cmake. A component's dependency file finds only
 #    the packages its own targets link (rackcat-<name>-dependencies.cmake), so coe alone needs
 #    nothing but the C++ library.
+# Programs get a view too: rackcat_private_headers(target) for a program's own folder (the
+# CLI's apps/*.hpp), rackcat_folder_view() for whole trees (tests/ for the test, benchmark and
+# fuzz programs; tests/layering/check_layers.py keeps their finer rules).
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
@@ -44,9 +54,59 @@ function(_rackcat_collect_libraries dir out)
   set(${out} ${libs} PARENT_SCOPE)
 endfunction()
 
+# _rackcat_make_view(<name> <repository-relative paths>...): the directory
+# build/include/<name> holding a symbolic link <path> -> <source tree>/<path> for each path and
+# nothing else. Rebuilt at every configure, so a header moved or removed leaves no stale link.
+function(_rackcat_make_view name)
+  set(root ${PROJECT_BINARY_DIR}/include/${name})
+  file(REMOVE_RECURSE ${root})
+  file(MAKE_DIRECTORY ${root})
+  foreach(rel IN LISTS ARGN)
+    cmake_path(GET rel PARENT_PATH parent)
+    file(MAKE_DIRECTORY ${root}/${parent})
+    file(CREATE_LINK ${PROJECT_SOURCE_DIR}/${rel} ${root}/${rel} SYMBOLIC)
+  endforeach()
+  set(_rackcat_view_dir ${root} PARENT_SCOPE)
+endfunction()
+
+# The headers (repository-relative) a library owns; see the header comment.
+function(_rackcat_headers_of target all_libs out)
+  get_target_property(src_dir ${target} SOURCE_DIR)
+  file(RELATIVE_PATH rel ${PROJECT_SOURCE_DIR} ${src_dir})
+  get_property(explicit TARGET ${target} PROPERTY RACKCAT_HEADERS SET)
+  if(explicit)
+    get_target_property(names ${target} RACKCAT_HEADERS)
+  else()
+    file(GLOB paths CONFIGURE_DEPENDS ${src_dir}/*.hpp)
+    set(names)
+    foreach(p IN LISTS paths)
+      cmake_path(GET p FILENAME n)
+      list(APPEND names ${n})
+    endforeach()
+    foreach(other IN LISTS all_libs)
+      get_target_property(other_dir ${other} SOURCE_DIR)
+      get_property(other_explicit TARGET ${other} PROPERTY RACKCAT_HEADERS SET)
+      if(NOT other STREQUAL target AND other_dir STREQUAL src_dir AND other_explicit)
+        get_target_property(taken ${other} RACKCAT_HEADERS)
+        if(taken)
+          list(REMOVE_ITEM names ${taken})
+        endif()
+      endif()
+    endforeach()
+  endif()
+  set(headers)
+  foreach(n IN LISTS names)
+    if(NOT EXISTS ${src_dir}/${n})
+      message(FATAL_ERROR "${target}: RACKCAT_HEADERS names ${rel}/${n}, which does not exist")
+    endif()
+    list(APPEND headers ${rel}/${n})
+  endforeach()
+  set(${out} ${headers} PARENT_SCOPE)
+endfunction()
+
 # The include root as a usage requirement: drop a plain source-tree path a folder may have set,
-# add the build/install pair.
-function(_rackcat_set_include_root target)
+# add the build view / install pair.
+function(_rackcat_set_include_root target headers)
   get_target_property(type ${target} TYPE)
   set(scope PUBLIC)
   if(type STREQUAL "INTERFACE_LIBRARY")
@@ -55,13 +115,38 @@ function(_rackcat_set_include_root target)
   foreach(prop INTERFACE_INCLUDE_DIRECTORIES INCLUDE_DIRECTORIES)
     get_target_property(dirs ${target} ${prop})
     if(dirs)
-      list(REMOVE_ITEM dirs ${PROJECT_SOURCE_DIR})
-      set_target_properties(${target} PROPERTIES ${prop} "${dirs}")
+      if(${PROJECT_SOURCE_DIR} IN_LIST dirs)
+        message(FATAL_ERROR "${target}: the repository root must not be an include directory "
+                            "(the build gives each library a view of its own headers)")
+      endif()
     endif()
   endforeach()
+  _rackcat_make_view(${target} ${headers})
   target_include_directories(${target} ${scope}
-    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}>
+    $<BUILD_INTERFACE:${_rackcat_view_dir}>
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}/rackcat>)
+endfunction()
+
+# rackcat_folder_view(<view> <out-var> <folder>...): an include root holding only the named
+# repository folders (whole trees), e.g. rackcat_folder_view(tests_view dir tests).
+function(rackcat_folder_view view out)
+  _rackcat_make_view(${view} ${ARGN})
+  set(${out} ${_rackcat_view_dir} PARENT_SCOPE)
+endfunction()
+
+# rackcat_private_headers(<target>): a program (not a library) sees its own folder's headers,
+# e.g. apps/commands.hpp for the rackcat CLI.
+function(rackcat_private_headers target)
+  get_target_property(src_dir ${target} SOURCE_DIR)
+  file(RELATIVE_PATH rel ${PROJECT_SOURCE_DIR} ${src_dir})
+  file(GLOB paths CONFIGURE_DEPENDS ${src_dir}/*.hpp)
+  set(headers)
+  foreach(p IN LISTS paths)
+    file(RELATIVE_PATH r ${PROJECT_SOURCE_DIR} ${p})
+    list(APPEND headers ${r})
+  endforeach()
+  _rackcat_make_view(${target} ${headers})
+  target_include_directories(${target} PRIVATE ${_rackcat_view_dir})
 endfunction()
 
 function(rackcat_finalize_libraries)
@@ -70,7 +155,9 @@ function(rackcat_finalize_libraries)
   foreach(t IN LISTS libs)
     string(REGEX REPLACE "^rackcat_" "" name ${t})
     list(APPEND components ${name})
-    _rackcat_set_include_root(${t})
+    _rackcat_headers_of(${t} "${libs}" headers)
+    set_property(GLOBAL PROPERTY _rackcat_headers_${t} ${headers})
+    _rackcat_set_include_root(${t} "${headers}")
     set_target_properties(${t} PROPERTIES EXPORT_NAME ${name})
     if(NOT TARGET rackcat::${name})
       add_library(rackcat::${name} ALIAS ${t})
@@ -116,19 +203,14 @@ function(rackcat_finalize_libraries)
             DESTINATION ${RACKCAT_INSTALL_CMAKEDIR} COMPONENT dev)
   endforeach()
 
-  # Public headers: every .hpp of the folders that hold a library, under include/rackcat/.
-  set(header_dirs)
+  # Public headers: each library's own, under include/rackcat/<folder>/.
   foreach(t IN LISTS libs)
-    get_target_property(src_dir ${t} SOURCE_DIR)
-    file(RELATIVE_PATH rel ${PROJECT_SOURCE_DIR} ${src_dir})
-    list(APPEND header_dirs ${rel})
-  endforeach()
-  list(REMOVE_DUPLICATES header_dirs)
-  foreach(rel IN LISTS header_dirs)
-    file(GLOB headers CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/${rel}/*.hpp)
-    if(headers)
-      install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/rackcat/${rel} COMPONENT dev)
-    endif()
+    get_property(headers GLOBAL PROPERTY _rackcat_headers_${t})
+    foreach(h IN LISTS headers)
+      cmake_path(GET h PARENT_PATH rel)
+      install(FILES ${PROJECT_SOURCE_DIR}/${h} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/rackcat/${rel}
+              COMPONENT dev)
+    endforeach()
   endforeach()
 
   set(RACKCAT_COMPONENTS ${components})

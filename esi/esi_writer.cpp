@@ -11,7 +11,6 @@
 #include "coe/data_type.hpp"
 #include "coe/diagnosis_history.hpp"
 #include "coe/unit_code.hpp"
-#include "mdp/diagnosis_catalogue.hpp"
 
 namespace rackcat::esi {
 namespace {
@@ -341,16 +340,16 @@ pugi::xml_node write_profile(pugi::xml_node parent, const char* element,
 
 // The texts of the 0x10F3 messages (ETG.2000 DiagnosticsType, ETG.1020 ch. 13): one
 // DiagMessage per text ID with its class; %1..%4 stand for the message's parameters by
-// position (RIM, module, channel, detail; mdp/diagnosis_catalogue.hpp).
-void write_diag_messages(pugi::xml_node profile) {
+// position (the device's own; for the rack RIM, module, channel, detail).
+void write_diag_messages(pugi::xml_node profile, const std::vector<DiagMessage>& texts) {
   auto messages = profile.append_child("DiagMessages");
-  for (const mdp::diag::DiagText& t : mdp::diag::catalogue()) {
+  for (const DiagMessage& t : texts) {
     auto m = messages.append_child("DiagMessage");
     text_child(m, "TextId", esi_hex(t.text_id, 4));
     auto text = m.append_child("MessageText");
-    text.text().set(std::string(t.text).c_str());
+    text.text().set(t.text.c_str());
     text.append_attribute("LcId").set_value(1033);
-    const auto type = mdp::diag::type_of(t.text_id);
+    const auto type = t.type;
     text_child(m.append_child("Flags"), "DiagClass",
                type == coe::diag::Type::Error     ? "error"
                : type == coe::diag::Type::Warning ? "warning"
@@ -525,8 +524,8 @@ std::string write_esi(const EsiContent& c) {
   // Module objects are defined once, in their <Module> (ETG.5001; a configurator that fills the
   // slots offline adds them per slot): the device level carries the device's own objects.
   auto device_profile = write_profile(device, "Profile", *c.dictionary, false, &c.module_objects);
-  if (d.coe.diag_history && c.dictionary->find(coe::diag::kIndex)) {
-    write_diag_messages(device_profile);
+  if (d.coe.diag_history && c.dictionary->find(coe::diag::kIndex) && !c.diag_messages.empty()) {
+    write_diag_messages(device_profile, c.diag_messages);
   }
 
   for (auto f : d.fmmus) text_child(device, "Fmmu", fmmu_text(f));

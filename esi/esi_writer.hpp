@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "coe/diagnosis_history.hpp"
 #include "coe/object_dictionary.hpp"
 #include "esi/device_description.hpp"
 
@@ -36,6 +37,14 @@ struct SlotRules {
   std::string slot_name = "Module";
 };
 
+// One ETG.2000 DiagMessage (DiagnosticsType) of the 0x10F3 history (ETG.1020 ch. 13): a text ID,
+// its text (%1..%4 = the message's parameters by position) and its class.
+struct DiagMessage {
+  uint16_t text_id = 0;
+  std::string text;
+  coe::diag::Type type = coe::diag::Type::Info;
+};
+
 struct EsiContent {
   const DeviceDescription* device = nullptr;
   const coe::ObjectDictionary* dictionary = nullptr;
@@ -46,6 +55,8 @@ struct EsiContent {
   // Objects of the device's modules: defined in their <Module> (ETG.5001), so the device-level
   // Dictionary leaves them out and a configurator filling the slots gets each once.
   std::set<uint16_t> module_objects;
+  // The device's diagnosis texts, written when it has the 0x10F3 history (empty: none).
+  std::vector<DiagMessage> diag_messages;
 };
 
 // The ESI document as UTF-8 XML text.

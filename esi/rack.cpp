@@ -6,6 +6,7 @@
 
 #include "esi/describe_dictionary.hpp"
 #include "mdp/card_catalogue.hpp"
+#include "mdp/diagnosis_catalogue.hpp"
 #include "mdp/rack_config.hpp"
 #include "mdp/sync_manager_layout.hpp"
 
@@ -196,6 +197,11 @@ std::string write_esi(const mdp::Device& device) {
   c.slots.max_slots = mdp::kMaxModules;
   c.slots.index_increment = mdp::kIndexDistance;
   c.slots.pdo_increment = mdp::sm::kPdoIndexIncrement;
+  // The rack's 0x10F3 texts (mdp/diagnosis_catalogue.hpp): %1 RIM, %2 module, %3 channel,
+  // %4 detail.
+  for (const mdp::diag::DiagText& t : mdp::diag::catalogue()) {
+    c.diag_messages.push_back({t.text_id, std::string(t.text), mdp::diag::type_of(t.text_id)});
+  }
   return write_esi(c);
 }
 

@@ -7,6 +7,13 @@ Inside ecat/ the firmware (ecat/slave) and the LAN9252 access (ecat/lan9252) see
 through the PDI port (ecat/pdi_port.hpp), never the chip's internals (ecat/esc) or the host
 I/O (ecat/host); the chip knows nothing of the firmware.
 
+The compiler already refuses most of this: each library's include path holds only its own
+headers and those of what it links (docs/ESC.md "Layers, enforced by the build";
+layering_compiler_refuses). This check stays for what the compiler cannot see: tests,
+benchmarks and fuzz targets (which share one tests/ include root), headers no library
+compiles, and rules finer than a link (device/ links the firmware but may use only its
+mailbox seam).
+
 Every quoted #include "area/..." of every .hpp/.cpp below the library folders is checked
 against RULES: the longest folder prefix of the including file names what it may include
 (path prefixes; a file may always include its own folder). Tests, benchmarks and fuzz targets

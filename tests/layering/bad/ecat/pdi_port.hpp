@@ -1,2 +1,0 @@
-// Part of the check's own test tree (tests/layering/bad): a header the check allows.
-#pragma once

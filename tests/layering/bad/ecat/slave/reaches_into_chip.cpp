@@ -1,0 +1,7 @@
+// Deliberate violation (tests/layering/CMakeLists.txt): the firmware sees the chip only through
+// ecat/pdi_port.hpp. Compiled with the include path of its layer's library it must fail on the
+// second #include
+// ("No such file or directory"); check_layers.py must flag that line too.
+#include "ecat/pdi_port.hpp"
+// The forbidden one:
+#include "ecat/esc/esc.hpp"

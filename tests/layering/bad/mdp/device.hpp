@@ -1,2 +1,0 @@
-// Part of the check's own test tree (tests/layering/bad): a header the violation names.
-#pragma once
