@@ -37,7 +37,7 @@
 #include "apps/rack_slave/rack_loading.hpp"
 #include "apps/rack_slave/rack_slave.hpp"
 #include "apps/slave_link.hpp"
-#include "base/background_thread.hpp"
+#include "base/real_time.hpp"
 #include "device/foe_files.hpp"
 #include "device/generic_device.hpp"
 #include "ecat/host/runner.hpp"

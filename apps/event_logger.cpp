@@ -10,7 +10,7 @@
 #include <memory>
 #include <string_view>
 
-#include "base/background_thread.hpp"
+#include "base/real_time.hpp"
 #include "base/esm_state.hpp"
 #include "base/mailbox_error.hpp"
 #include "coe/abort_code.hpp"

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "base/background_thread.hpp"
+#include "base/real_time.hpp"
 
 namespace rackcat::mdp {
 

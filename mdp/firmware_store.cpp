@@ -10,7 +10,7 @@
 #include <cerrno>
 #include <cstring>
 
-#include "base/background_thread.hpp"
+#include "base/real_time.hpp"
 
 namespace rackcat::mdp {
 namespace {

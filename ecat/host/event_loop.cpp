@@ -10,6 +10,7 @@
 #include <csignal>
 #include <ctime>
 
+#include "base/real_time.hpp"
 #include "ecat/host/pcap_writer.hpp"
 
 namespace rackcat::ecat {
@@ -141,8 +142,13 @@ int EventLoop::run() {
   return rc;
 }
 
+uint64_t EventLoop::spin_window_ns() const {
+  return base::runs_real_time() ? 0 : options_.spin_after_frame_ns;
+}
+
 int EventLoop::run_blocking() {
   pollfd fds[2] = {{link_.fd(), POLLIN, 0}, {event_fd_, POLLIN, 0}};
+  const uint64_t spin_ns = spin_window_ns();
   // Posts and signals that arrived before run() are handled on the first pass.
   if (take_stop_signal()) return 0;
   run_posted();
@@ -156,7 +162,7 @@ int EventLoop::run_blocking() {
       const auto frame = link_.try_receive();
       if (!frame.empty()) {
         handle_frame(frame);
-        spin_until = monotonic_ns() + options_.spin_after_frame_ns;
+        spin_until = monotonic_ns() + spin_ns;
       }
       if (posted_pending_.load(std::memory_order_acquire)) run_posted();
       if (g_stop_signal.load(std::memory_order_relaxed) != 0 && take_stop_signal()) break;
@@ -189,9 +195,7 @@ int EventLoop::run_blocking() {
       const auto frame = link_.try_receive();
       if (!frame.empty()) {
         handle_frame(frame);
-        if (options_.spin_after_frame_ns != 0) {
-          spin_until = monotonic_ns() + options_.spin_after_frame_ns;
-        }
+        if (spin_ns != 0) spin_until = monotonic_ns() + spin_ns;
       }
     }
     if (fds[1].revents & POLLIN) {

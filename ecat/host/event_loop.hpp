@@ -12,7 +12,10 @@
 // short bounded window (Options::spin_after_frame_ns, default 100 µs) before it sleeps again,
 // because masters send mailbox exchanges in bursts (an SDO upload is 5 frames back to back):
 // one wake-up per burst instead of one per frame. With no frames it sleeps (0 % idle CPU); a
-// master cycling every T costs at most spin/T extra CPU.
+// master cycling every T costs at most spin/T extra CPU. A loop thread in a real-time class
+// (chrt -f) never opens that window: polling at SCHED_FIFO starves the kernel's softirq work
+// on its CPU - the delivery of the very frames it waits for - and ethercrab with 16 slaves lost
+// a PDU after 30 ms in about half of its runs that way (base/real_time.hpp).
 //
 // Signals: a SIGINT/SIGTERM handler (SA_RESTART) records the signal and wakes the loop through
 // its eventfd. Whichever thread the kernel picks to run it, the process is not killed, so
@@ -62,6 +65,7 @@ class EventLoop {
     PcapWriter* pcap = nullptr;   // not owned; flushed when run() returns
     bool stop_on_signals = true;  // SIGINT/SIGTERM end run()
     // Blocking mode: after a frame, poll without sleeping this long for the next (0 = off).
+    // Not used on a real-time thread (spin_window_ns()).
     uint64_t spin_after_frame_ns = 100'000;
   };
 
@@ -88,6 +92,10 @@ class EventLoop {
   // Thread-safe (and safe from the loop thread itself).
   void post(std::function<void()> fn);
   void stop();
+
+  // The window run() polls after a frame when called on this thread: spin_after_frame_ns, or
+  // 0 on a real-time thread.
+  uint64_t spin_window_ns() const;
 
   bool running() const { return running_.load(std::memory_order_relaxed); }
   int stop_signal() const { return stop_signal_; }  // the signal that ended run(), or 0

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <ctime>
 
-#include "base/background_thread.hpp"
+#include "base/real_time.hpp"
 
 namespace rackcat::ecat {
 namespace {

@@ -12,7 +12,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "base/background_thread.hpp"
+#include "base/real_time.hpp"
 #include "modules/cards/drivers.hpp"
 
 namespace rackcat::modules {

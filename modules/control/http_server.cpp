@@ -17,7 +17,7 @@
 #include <memory>
 #include <stdexcept>
 
-#include "base/background_thread.hpp"
+#include "base/real_time.hpp"
 
 namespace rackcat::modules {
 namespace {

@@ -2,6 +2,8 @@
 // other threads, timer deadlines, and a clean stop on SIGTERM. On the loopback interface;
 // skipped without CAP_NET_RAW.
 #include <gtest/gtest.h>
+#include <pthread.h>
+#include <sched.h>
 
 #include <atomic>
 #include <chrono>
@@ -187,6 +189,26 @@ TEST_P(LinkEventLoop, StopBeforeRunIsNotLost) {
   // Consumed: the loop runs again until the next stop().
   loop.post([&] { loop.stop(); });
   EXPECT_EQ(loop.run(), 0);
+}
+
+// Under chrt -f the loop must not poll after a frame: a SCHED_FIFO thread that never sleeps
+// starves the softirq work that delivers the next frame (ethercrab with 16 slaves lost PDUs
+// after 30 ms in about half of its runs). At normal priority the window stays.
+TEST(LinkEventLoopSpin, NoWindowOnARealTimeThread) {
+  if (!testutil::can_open_raw_socket()) GTEST_SKIP() << "needs root or CAP_NET_RAW";
+  RawSocketLink link("lo");
+  EventLoop loop(link, {.wait = WaitMode::Blocking,
+                        .pcap = nullptr,
+                        .stop_on_signals = false,
+                        .spin_after_frame_ns = 100'000});
+  EXPECT_EQ(loop.spin_window_ns(), 100'000u);
+  sched_param rt{};
+  rt.sched_priority = 1;
+  ASSERT_EQ(pthread_setschedparam(pthread_self(), SCHED_FIFO, &rt), 0);
+  EXPECT_EQ(loop.spin_window_ns(), 0u);
+  sched_param normal{};
+  ASSERT_EQ(pthread_setschedparam(pthread_self(), SCHED_OTHER, &normal), 0);
+  EXPECT_EQ(loop.spin_window_ns(), 100'000u);
 }
 
 // Adaptive waiting (blocking mode): a frame opens a window in which the loop polls without

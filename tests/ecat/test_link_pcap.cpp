@@ -179,7 +179,7 @@ std::vector<int> other_threads_policies() {
 
 // rackcat runs under `chrt -f` and Linux threads inherit their creator's policy: the capture
 // writer must not keep SCHED_FIFO, or its megabyte writes hold the CPU the device thread
-// needs to answer the master within its timeout (base/background_thread.hpp).
+// needs to answer the master within its timeout (base/real_time.hpp).
 TEST(LinkPcap, TheWriterThreadLeavesTheRealTimeClass) {
   sched_param rt{};
   rt.sched_priority = 1;
