@@ -10,9 +10,9 @@
 #include <memory>
 #include <string_view>
 
-#include "base/real_time.hpp"
 #include "base/esm_state.hpp"
 #include "base/mailbox_error.hpp"
+#include "base/real_time.hpp"
 #include "coe/abort_code.hpp"
 #include "ecat/al_status_code.hpp"
 
