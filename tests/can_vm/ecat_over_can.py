@@ -160,8 +160,10 @@ def main():
 
     # SOEM's default timeouts are for real hardware; under software emulation (qemu TCG, and
     # the sanitizer build on top) the VM runs each process several times slower.
+    # t.ret bounds one frame's round trip (a mailbox poll, a state read): under TCG the VM's
+    # CPUs can stall for tens of ms on a busy 2-core host.
     t = pysoem.settings.timeouts
-    t.ret, t.safe, t.tx_mailbox, t.rx_mailbox = 20_000, 200_000, 200_000, 2_000_000
+    t.ret, t.safe, t.tx_mailbox, t.rx_mailbox = 100_000, 200_000, 200_000, 2_000_000
 
     try:
         sh("ip", "link", "set", "lo", "up")  # the control API listens on 127.0.0.1
@@ -204,12 +206,26 @@ def main():
     # the callback. SOEM reads the queued messages before the SDO answer, so one read drains.
     emergencies = []
     s.add_emergency_callback(lambda e: emergencies.append(e.error_code))
-    sdo_u(s, 0x1018, 1, "<I")
+    retries = 0
+
+    def patiently(read):
+        """An SDO exchange that a stalled emulated CPU lost (no reply within the timeout: pysoem
+        raises WkcError) is tried again, and counted; an SDO abort is not."""
+        nonlocal retries
+        for _ in range(3):
+            try:
+                return read()
+            except pysoem.WkcError:
+                retries += 1
+                time.sleep(0.05)
+        return read()
+
+    patiently(lambda: sdo_u(s, 0x1018, 1, "<I"))
     master.config_map()
     # The process-data watchdog (default 100 ms) trips when the master pauses that long; on a
     # loaded host the emulated CPUs can stall for longer. 1 s keeps the test about the CAN link.
     s.set_watchdog("processdata", 1000)
-    pdo = read_pdo_map(s)
+    pdo = patiently(lambda: read_pdo_map(s))  # only reads: safe to repeat whole
     ai_clock = pdo.find(*AI_CLOCK, "in")
     ai_const = pdo.find(*AI_CONST, "in")
     do = pdo.find(*DO_RELAYS, "out")
@@ -220,19 +236,9 @@ def main():
         master.send_processdata()
         return master.receive_processdata(20_000)
 
-    retries = 0
-
     def rim2_state():
-        """0x2021:08 over SDO; a read lost to the emulated CPU's timing is tried again (and
-        counted), an abort is not."""
-        nonlocal retries
-        for attempt in range(3):
-            try:
-                return sdo_u(s, *RIM2_STATE, "<I")
-            except pysoem.WkcError:
-                retries += 1
-                cycle()
-        return sdo_u(s, *RIM2_STATE, "<I")
+        """0x2021:08 over SDO."""
+        return patiently(lambda: sdo_u(s, *RIM2_STATE, "<I"))
 
     def request(state, timeout_us=2_000_000):
         master.state = state
