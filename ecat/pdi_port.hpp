@@ -8,7 +8,8 @@
 // section II "PDI access"): reading the first byte of a SyncManager buffer the master wrote
 // clears its event, reading its last byte frees a mailbox, writing the last byte of a buffer
 // the master reads hands it over; reading AL control 0x0120 clears AL event request bit 0.
-// The firmware relies on exactly those side effects, as it would on a real chip.
+// The firmware relies on exactly those side effects, as it would on a real chip. A whole
+// SyncManager buffer may go in one block access (read_buffer/write_buffer) with the same rules.
 #pragma once
 
 #include <cstdint>
@@ -25,6 +26,22 @@ class PdiPort {
   // One access of `dst.size()` / `src.size()` bytes at `address`, in address order.
   virtual void read(uint16_t address, std::span<uint8_t> dst) = 0;
   virtual void write(uint16_t address, std::span<const uint8_t> src) = 0;
+  // One whole SyncManager buffer in one access: SM `sm`'s buffer starting at `address`, as
+  // many bytes as it holds (ETG.1000.4 §6.7.2; how a firmware moves SM2 outputs and SM3 inputs
+  // each cycle, and SM0/SM1 mailboxes). The ESC applies what it applies to those bytes read or
+  // written one after the other: the first byte opens the buffer, the last completes it - a
+  // read releases it (a mailbox is emptied; buffered: the next read opens the newest buffer),
+  // a write hands it over (a mailbox is full; buffered: the three-buffer exchange makes it the
+  // newest). A port may do it faster than the byte-wise access (the emulated ESC finds the SM
+  // without a search, a LAN9252 moves it in one PRAM FIFO transfer); by default it is that.
+  virtual void read_buffer(uint8_t sm, uint16_t address, std::span<uint8_t> dst) {
+    static_cast<void>(sm);
+    read(address, dst);
+  }
+  virtual void write_buffer(uint8_t sm, uint16_t address, std::span<const uint8_t> src) {
+    static_cast<void>(sm);
+    write(address, src);
+  }
   // The IRQ line: AL event request 0x0220 ANDed with the AL event mask 0x0204 is non-zero
   // (ETG.1000.4 §6.5 "interrupts").
   virtual bool irq() const = 0;

@@ -113,11 +113,14 @@ constexpr bool ecat_writes(uint8_t control) {
 inline constexpr uint8_t kControlAlEvent = 0x20;
 inline constexpr uint8_t kControlWatchdog = 0x40;
 // Status: bit 0 "interrupt write" (buffer completely written), bit 1 "interrupt read" (buffer
-// completely read), bit 3 mailbox full, bits 5:4 last written buffer (11 = none).
+// completely read), bit 3 mailbox full, bits 5:4 last written buffer (11 = none), bit 6 read
+// buffer open, bit 7 write buffer open (first byte accessed, last byte not yet).
 inline constexpr uint8_t kStatusWritten = 0x01;
 inline constexpr uint8_t kStatusRead = 0x02;
 inline constexpr uint8_t kStatusFull = 0x08;
 inline constexpr uint8_t kStatusNoBuffer = 0x30;
+inline constexpr uint8_t kStatusReadOpen = 0x40;
+inline constexpr uint8_t kStatusWriteOpen = 0x80;
 // Activation (ECAT): bit 0 enable, bit 1 repeat request. PDI control: bit 0 deactivate, bit 1
 // repeat acknowledge (ETG.1000.4 §6.7.3).
 inline constexpr uint8_t kActivateEnable = 0x01;

@@ -62,6 +62,8 @@ void Esc::power_on_reset() {
   sm_.fill(SmState{});
   activate_seen_.fill(0);
   sm_enabled_mask_ = 0;
+  sm_alone_mask_ = 0;
+  sm_first_byte_ = reg::kAddressSpace;
   // PDI control 0x0807 resets to "deactivated" (the firmware activates what its state allows,
   // ETG.1000.6 §5.3); status "no buffer written".
   for (int i = 0; i < kSyncManagers; ++i) {

@@ -22,6 +22,7 @@
 
 #include "ecat/clock.hpp"
 #include "ecat/esc/esc_memory.hpp"
+#include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
 
@@ -132,6 +133,13 @@ class Esc {
   // with their hand-over (see esc/pdi.cpp). Accesses past 0xFFFF are cut at the end.
   void pdi_read(uint16_t address, uint8_t* dst, uint16_t len);
   void pdi_write(uint16_t address, const uint8_t* src, uint16_t len);
+  // One whole SyncManager buffer in one PDI access (SM `sm`, `len` bytes at `address`, its
+  // start): what pdi_read/pdi_write of those bytes do - the first byte opens the buffer, the
+  // last completes it (ETG.1000.4 §6.7.1/§6.7.2) - without looking for the SyncManager. When
+  // SM `sm` is not enabled with exactly that buffer, or shares bytes with another enabled SM,
+  // it is a plain pdi_read/pdi_write.
+  void pdi_read_buffer(uint8_t sm, uint16_t address, uint8_t* dst, uint16_t len);
+  void pdi_write_buffer(uint8_t sm, uint16_t address, const uint8_t* src, uint16_t len);
   // The IRQ output: AL event request 0x0220 & AL event mask 0x0204.
   bool pdi_irq() const;
   // The ESC was reset (power-on or 'R','E','S' to 0x0040) since the last call: the reset
@@ -215,6 +223,22 @@ class Esc {
   void sm_after_read(uint16_t address, uint16_t len);
   bool sm_allows_write(uint16_t address, uint16_t len);
   void sm_after_write(uint16_t address, uint16_t len);
+  // An access to bytes [address, end) of SM n's buffer by the side that fills it (`filler`:
+  // the master for an SM it writes, the PDI for one it reads) or by the side that drains it:
+  // opens the buffer on its first byte, completes it on its last (status 0x0805+8n, events).
+  void sm_buffer_access(int index, uint32_t address, uint32_t end, bool filler);
+  // Whether the side that fills SM n's buffer may write it now (active, a mailbox not full).
+  bool sm_takes_write(int index) const;
+  uint8_t& sm_status(int index) { return mem_[reg::sm::base(index) + reg::kSmStatusOffset]; }
+  // Calls f(n) for every enabled SyncManager n whose buffer meets bytes [address, end).
+  template <class F>
+  void for_each_sm_meeting(uint32_t address, uint32_t end, F&& f) const {
+    for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= static_cast<uint16_t>(mask - 1)) {
+      const int n = __builtin_ctz(mask);
+      const SmState& s = sm_[n];
+      if (address < static_cast<uint32_t>(s.start) + s.length && s.start < end) f(n);
+    }
+  }
   void update_ecat_event(int index);
   void update_al_event(int index);
   // pdi.cpp: the microcontroller's accesses.
@@ -251,6 +275,8 @@ class Esc {
   std::array<SmState, kSyncManagers> sm_{};
   std::array<uint8_t, kSyncManagers> activate_seen_{};  // 0x0806+8n at the last reload
   uint16_t sm_enabled_mask_ = 0;
+  uint16_t sm_alone_mask_ = 0;  // bit n: SM n enabled, no other enabled SM shares a byte
+  uint32_t sm_first_byte_ = reg::kAddressSpace;  // lowest start of an enabled SM's buffer
   std::array<FmmuState, kFmmus> fmmu_{};
   uint16_t fmmu_active_mask_ = 0;  // bit n: FMMU n activated with a read or write type
   uint32_t* fmmu_generation_ = nullptr;

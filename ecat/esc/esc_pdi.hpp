@@ -17,6 +17,12 @@ class EscPdi final : public PdiPort {
   void write(uint16_t address, std::span<const uint8_t> src) override {
     esc_.pdi_write(address, src.data(), static_cast<uint16_t>(src.size()));
   }
+  void read_buffer(uint8_t sm, uint16_t address, std::span<uint8_t> dst) override {
+    esc_.pdi_read_buffer(sm, address, dst.data(), static_cast<uint16_t>(dst.size()));
+  }
+  void write_buffer(uint8_t sm, uint16_t address, std::span<const uint8_t> src) override {
+    esc_.pdi_write_buffer(sm, address, src.data(), static_cast<uint16_t>(src.size()));
+  }
   bool irq() const override { return esc_.pdi_irq(); }
 
  private:

@@ -14,14 +14,24 @@
 // 0x0508 and the master's writes there are ignored (sii.cpp). A microcontroller uses this to
 // store a new EEPROM content, e.g. after a firmware update.
 //
-// SyncManager buffers, seen from the PDI (ETG.1000.4 §6.7.1/§6.7.2):
-//   - a buffer the master writes (SM0 mailbox, SM2 outputs): reading its first byte clears the
-//     "written" status and AL event bit 8+n; reading its last byte empties a mailbox (full flag
-//     off, "read" on, ECAT event for the master: it may write again);
-//   - a buffer the master reads (SM1 mailbox, SM3 inputs): writing its first byte clears the
-//     "read" status and AL event bit 8+n; writing its last byte hands it to the master (mailbox
-//     full; buffered: the newest of the three buffers). A full mailbox refuses PDI writes.
+// SyncManager buffers, seen from the PDI (ETG.1000.4 §6.7.1/§6.7.2; the rules are the same
+// for both sides, sync_manager.cpp sm_buffer_access):
+//   - a buffer the master writes (SM0 mailbox, SM2 outputs): reading its first byte opens it
+//     (clears the "written" status and AL event bit 8+n); reading its last byte completes the
+//     read: a mailbox is emptied (full flag off, "read" on, ECAT event for the master: it may
+//     write again), a buffered SM releases the buffer (the three-buffer exchange: the next read
+//     opens the newest buffer the master completed). A read that stops short of the last byte
+//     leaves the buffer open (status bit 6) and switches nothing;
+//   - a buffer the master reads (SM1 mailbox, SM3 inputs): writing its first byte opens it
+//     (clears "read" and AL event bit 8+n); writing its last byte hands it to the master
+//     (mailbox full; buffered: the newest of the three buffers, its index in status bits 5:4).
+//     A full mailbox refuses PDI writes.
 //   A SyncManager that is disabled or deactivated takes no PDI buffer access either.
+//   pdi_read_buffer/pdi_write_buffer are the same access for one whole buffer: a firmware's
+//   SM2 read and SM3 write each cycle, without looking for the SyncManager.
+//   The emulated ESC keeps one image per buffered SM: the datagram engine and the PDI run one
+//   after the other, never inside each other's access, so a complete access sees what the
+//   three buffers of a real ESC would give it.
 #include <algorithm>
 #include <cstring>
 
@@ -33,12 +43,7 @@ namespace rackcat::ecat {
 
 namespace {
 
-using reg::sm::ecat_writes;
-using reg::sm::is_mailbox;
-using reg::sm::kStatusFull;
-using reg::sm::kStatusNoBuffer;
-using reg::sm::kStatusRead;
-using reg::sm::kStatusWritten;
+namespace sm = reg::sm;
 
 constexpr bool overlaps(uint32_t address, uint32_t len, uint32_t reg_address, uint32_t reg_len) {
   return address < reg_address + reg_len && reg_address < address + len;
@@ -50,7 +55,7 @@ constexpr uint8_t pdi_write_mask(uint16_t a) {
   if (a == reg::kAlStatusCode || a == reg::kAlStatusCode + 1) return 0xFF;
   if (a >= reg::kAlEventMask && a < reg::kAlEventMask + 4) return 0xFF;
   if (a >= reg::kSm && a < reg::kSm + reg::kSmSize * 16 && (a & 7) == reg::kSmPdiControlOffset) {
-    return reg::sm::kPdiDeactivate | reg::sm::kRepeatAck;
+    return sm::kPdiDeactivate | sm::kRepeatAck;
   }
   if (a >= 0x0F80 && a < reg::kProcessRam) return 0xFF;  // user RAM
   return 0x00;
@@ -67,7 +72,8 @@ void Esc::pdi_read(uint16_t address, uint8_t* dst, uint16_t len) {
   if (len == 0) return;
   std::memcpy(dst, &mem_[address], len);
   if (address < reg::kProcessRam) pdi_registers_read(address, len);
-  pdi_buffer_read_done(address, len);
+  // A register read (e.g. AL event request 0x0220) meets no SyncManager buffer.
+  if (static_cast<uint32_t>(address) + len > sm_first_byte_) pdi_buffer_read_done(address, len);
 }
 
 void Esc::pdi_write(uint16_t address, const uint8_t* src, uint16_t len) {
@@ -94,23 +100,30 @@ void Esc::pdi_write(uint16_t address, const uint8_t* src, uint16_t len) {
 }
 
 void Esc::pdi_registers_read(uint16_t address, uint16_t len) {
-  uint32_t events = le::get32(&mem_[reg::kAlEventRequest]);
-  if (overlaps(address, len, reg::kAlControl, 2)) events &= ~0x01u;
-  if (overlaps(address, len, reg::kWatchdogStatusProcessData, 2)) events &= ~0x40u;
+  // Nothing between AL control and the watchdog status clears an event (0x0220, 0x0130...).
+  if (address >= reg::kAlControl + 2 &&
+      static_cast<uint32_t>(address) + len <= reg::kWatchdogStatusProcessData) {
+    return;
+  }
+  uint32_t clear = 0;
+  if (overlaps(address, len, reg::kAlControl, 2)) clear |= 0x01u;
+  if (overlaps(address, len, reg::kWatchdogStatusProcessData, 2)) clear |= 0x40u;
   if (overlaps(address, len, reg::kDcSync0Status, 1)) {
-    events &= ~0x04u;
+    clear |= 0x04u;
     mem_[reg::kDcSync0Status] &= static_cast<uint8_t>(~0x01);
   }
   if (overlaps(address, len, reg::kDcSync1Status, 1)) {
-    events &= ~0x08u;
+    clear |= 0x08u;
     mem_[reg::kDcSync1Status] &= static_cast<uint8_t>(~0x01);
   }
   if (overlaps(address, len, reg::kSm, reg::kSmSize * kSyncManagers)) {
     for (int n = 0; n < kSyncManagers; ++n) {
-      if (overlaps(address, len, reg::sm::base(n) + reg::kSmActivateOffset, 1)) events &= ~0x10u;
+      if (overlaps(address, len, sm::base(n) + reg::kSmActivateOffset, 1)) clear |= 0x10u;
     }
   }
-  le::put32(&mem_[reg::kAlEventRequest], events);
+  if (clear != 0) {
+    le::put32(&mem_[reg::kAlEventRequest], le::get32(&mem_[reg::kAlEventRequest]) & ~clear);
+  }
 }
 
 void Esc::pdi_registers_written(uint16_t address, const uint8_t* src, uint16_t len,
@@ -128,63 +141,55 @@ void Esc::pdi_registers_written(uint16_t address, const uint8_t* src, uint16_t l
   }
   if (overlaps(address, len, reg::kSm, reg::kSmSize * kSyncManagers)) {
     for (int n = 0; n < kSyncManagers; ++n) {
-      if (overlaps(address, len, reg::sm::base(n) + reg::kSmPdiControlOffset, 1)) reload_sm(n);
+      if (overlaps(address, len, sm::base(n) + reg::kSmPdiControlOffset, 1)) reload_sm(n);
     }
   }
 }
 
 void Esc::pdi_buffer_read_done(uint16_t address, uint16_t len) {
-  if (sm_enabled_mask_ == 0) return;
   const uint32_t end = static_cast<uint32_t>(address) + len;
-  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
-    const int n = __builtin_ctz(mask);
-    const SmState& s = sm_[n];
-    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
-    if (!s.active || !ecat_writes(s.control) || !(address < s_end && s.start < end)) continue;
-    uint8_t& status = mem_[reg::sm::base(n) + reg::kSmStatusOffset];
-    if (address <= s.start) status = static_cast<uint8_t>(status & ~kStatusWritten);
-    if (end >= s_end && is_mailbox(s.control)) {
-      status = static_cast<uint8_t>((status & ~(kStatusFull | kStatusWritten)) | kStatusRead);
-    }
-    update_ecat_event(n);
-    update_al_event(n);
-  }
+  for_each_sm_meeting(address, end, [&](int n) {
+    // The PDI drains the buffers the master writes (SM0 mailbox, SM2 outputs).
+    if (sm_[n].active && sm::ecat_writes(sm_[n].control)) sm_buffer_access(n, address, end, false);
+  });
 }
 
 bool Esc::pdi_buffer_write(uint16_t address, const uint8_t* src, uint16_t len) {
   const uint32_t end = static_cast<uint32_t>(address) + len;
-  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
-    const int n = __builtin_ctz(mask);
-    const SmState& s = sm_[n];
-    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
-    if (!(address < s_end && s.start < end)) continue;
-    if (!s.active || ecat_writes(s.control)) return false;
-    if (is_mailbox(s.control) &&
-        (mem_[reg::sm::base(n) + reg::kSmStatusOffset] & kStatusFull) != 0) {
-      return false;  // the master has not read the last message yet
-    }
-  }
+  bool allowed = true;
+  for_each_sm_meeting(address, end, [&](int n) {
+    // The PDI fills only the buffers the master reads, and a mailbox only once it is empty.
+    if (sm::ecat_writes(sm_[n].control) || !sm_takes_write(n)) allowed = false;
+  });
+  if (!allowed) return false;
   std::memcpy(&mem_[address], src, len);
-  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
-    const int n = __builtin_ctz(mask);
-    SmState& s = sm_[n];
-    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
-    if (!(address < s_end && s.start < end)) continue;
-    uint8_t& status = mem_[reg::sm::base(n) + reg::kSmStatusOffset];
-    if (address <= s.start) status = static_cast<uint8_t>(status & ~kStatusRead);
-    if (end >= s_end) {
-      if (is_mailbox(s.control)) {
-        status = static_cast<uint8_t>(status | kStatusFull | kStatusWritten);
-      } else {
-        status = static_cast<uint8_t>((status & ~kStatusNoBuffer) | (s.next_buffer << 4) |
-                                      kStatusWritten);
-        s.next_buffer = static_cast<uint8_t>((s.next_buffer + 1) % 3);
-      }
-    }
-    update_ecat_event(n);
-    update_al_event(n);
-  }
+  for_each_sm_meeting(address, end, [&](int n) { sm_buffer_access(n, address, end, true); });
   return true;
+}
+
+void Esc::pdi_read_buffer(uint8_t n, uint16_t address, uint8_t* dst, uint16_t len) {
+  // The whole buffer of an SM alone in its bytes, in process RAM (no register side effects):
+  // the same effects as the byte-wise access, found without the search.
+  if (n >= kSyncManagers || (sm_alone_mask_ & (1u << n)) == 0 || sm_[n].start != address ||
+      sm_[n].length != len || address < reg::kProcessRam) {
+    pdi_read(address, dst, len);
+    return;
+  }
+  std::memcpy(dst, &mem_[address], len);
+  if (sm_[n].active && sm::ecat_writes(sm_[n].control)) {
+    sm_buffer_access(n, address, static_cast<uint32_t>(address) + len, false);
+  }
+}
+
+void Esc::pdi_write_buffer(uint8_t n, uint16_t address, const uint8_t* src, uint16_t len) {
+  if (n >= kSyncManagers || (sm_alone_mask_ & (1u << n)) == 0 || sm_[n].start != address ||
+      sm_[n].length != len || address < reg::kProcessRam) {
+    pdi_write(address, src, len);
+    return;
+  }
+  if (sm::ecat_writes(sm_[n].control) || !sm_takes_write(n)) return;
+  std::memcpy(&mem_[address], src, len);
+  sm_buffer_access(n, address, static_cast<uint32_t>(address) + len, true);
 }
 
 }  // namespace rackcat::ecat

@@ -4,29 +4,18 @@
 // bits 4-11 for the master, AL event request 0x0220 bits 8-23 for the firmware. The PDI side
 // of the same buffers is in pdi.cpp.
 
+#include <algorithm>
+
 #include "base/little_endian.hpp"
 #include "ecat/esc/esc.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
 
-namespace {
-
-using reg::sm::ecat_writes;
-using reg::sm::is_mailbox;
-using reg::sm::kStatusFull;
-using reg::sm::kStatusNoBuffer;
-using reg::sm::kStatusRead;
-using reg::sm::kStatusWritten;
-
-inline uint16_t sm_base(int n) {
-  return static_cast<uint16_t>(reg::kSm + reg::kSmSize * n);
-}
-
-}  // namespace
+namespace sm = reg::sm;
 
 void Esc::reload_sm(int n) {
-  const uint16_t base = sm_base(n);
+  const uint16_t base = sm::base(n);
   SmState& s = sm_[n];
   const bool was_enabled = s.enabled;
   const SmState before = s;
@@ -46,9 +35,20 @@ void Esc::reload_sm(int n) {
   } else {
     sm_enabled_mask_ &= static_cast<uint16_t>(~(1u << n));
   }
+  sm_alone_mask_ = 0;
+  sm_first_byte_ = reg::kAddressSpace;
+  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= static_cast<uint16_t>(mask - 1)) {
+    const int k = __builtin_ctz(mask);
+    const SmState& t = sm_[k];
+    sm_first_byte_ = std::min<uint32_t>(sm_first_byte_, t.start);
+    uint16_t meeting = 0;
+    for_each_sm_meeting(t.start, static_cast<uint32_t>(t.start) + t.length,
+                        [&](int m) { meeting = static_cast<uint16_t>(meeting | (1u << m)); });
+    if (meeting == (1u << k)) sm_alone_mask_ = static_cast<uint16_t>(sm_alone_mask_ | meeting);
+  }
   if (s.enabled != was_enabled || s.active != was_active) {
     // (De)activation empties the buffers (ESC datasheet 0x0805).
-    mem_[base + reg::kSmStatusOffset] = is_mailbox(s.control) ? 0x00 : kStatusNoBuffer;
+    mem_[base + reg::kSmStatusOffset] = sm::is_mailbox(s.control) ? 0x00 : sm::kStatusNoBuffer;
     s.next_buffer = 0;
   }
   // AL event request bit 4: the SM activation register 0x0806+8n changed (enable, or the
@@ -67,85 +67,104 @@ void Esc::reload_sm(int n) {
 }
 
 bool Esc::sm_allows_read(uint16_t address, uint16_t len) {
-  if (sm_enabled_mask_ == 0) return true;
-  const uint32_t end = static_cast<uint32_t>(address) + len;
-  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
-    const int n = __builtin_ctz(mask);
+  bool allowed = true;
+  for_each_sm_meeting(address, static_cast<uint32_t>(address) + len, [&](int n) {
     const SmState& s = sm_[n];
-    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
-    if (!(address < s_end && s.start < end)) continue;
-    // A SyncManager deactivated by the PDI blocks its buffer: no data, no WKC.
-    if (!s.active) return false;
-    const uint8_t status = mem_[sm_base(n) + reg::kSmStatusOffset];
-    if (is_mailbox(s.control) && !ecat_writes(s.control) && (status & kStatusFull) == 0) {
-      return false;  // empty mailbox: no data, no WKC
+    // A SyncManager deactivated by the PDI blocks its buffer: no data, no WKC; so does an
+    // empty mailbox the master reads.
+    if (!s.active || (sm::is_mailbox(s.control) && !sm::ecat_writes(s.control) &&
+                      (sm_status(n) & sm::kStatusFull) == 0)) {
+      allowed = false;
     }
-  }
-  return true;
+  });
+  return allowed;
 }
 
 void Esc::sm_after_read(uint16_t address, uint16_t len) {
-  if (sm_enabled_mask_ == 0) return;
   const uint32_t end = static_cast<uint32_t>(address) + len;
-  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
-    const int n = __builtin_ctz(mask);
-    const SmState& s = sm_[n];
-    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
-    // Only reading the last byte completes a read (ETG.1000.4 §6.7.2).
-    if (ecat_writes(s.control) || !(address < s_end && end >= s_end)) continue;
-    uint8_t& status = mem_[sm_base(n) + reg::kSmStatusOffset];
-    if (is_mailbox(s.control)) {
-      status = static_cast<uint8_t>((status & ~(kStatusFull | kStatusWritten)) | kStatusRead);
-    } else {
-      status = static_cast<uint8_t>((status & ~kStatusWritten) | kStatusRead);
-    }
-    update_ecat_event(n);
-    update_al_event(n);
-  }
+  for_each_sm_meeting(address, end, [&](int n) {
+    if (!sm::ecat_writes(sm_[n].control)) sm_buffer_access(n, address, end, false);
+  });
+}
+
+bool Esc::sm_takes_write(int n) const {
+  // A full mailbox refuses the write until the other side has read it (ETG.1000.4 §6.7.1).
+  const SmState& s = sm_[n];
+  return s.active && !(sm::is_mailbox(s.control) &&
+                       (mem_[sm::base(n) + reg::kSmStatusOffset] & sm::kStatusFull) != 0);
 }
 
 bool Esc::sm_allows_write(uint16_t address, uint16_t len) {
-  if (sm_enabled_mask_ == 0) return true;
-  const uint32_t end = static_cast<uint32_t>(address) + len;
-  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
-    const int n = __builtin_ctz(mask);
-    const SmState& s = sm_[n];
-    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
-    if (!(address < s_end && s.start < end)) continue;
-    if (!s.active || !ecat_writes(s.control)) return false;
-    // A full mailbox refuses the write: WKC stays 0 and the master retries.
-    if (is_mailbox(s.control) && (mem_[sm_base(n) + reg::kSmStatusOffset] & kStatusFull)) {
-      return false;
-    }
-  }
-  return true;
+  bool allowed = true;
+  for_each_sm_meeting(address, static_cast<uint32_t>(address) + len, [&](int n) {
+    // The master writes only the buffers of SMs it writes: WKC stays 0 and it retries.
+    if (!sm::ecat_writes(sm_[n].control) || !sm_takes_write(n)) allowed = false;
+  });
+  return allowed;
 }
 
 void Esc::sm_after_write(uint16_t address, uint16_t len) {
-  if (sm_enabled_mask_ == 0) return;
   const uint32_t end = static_cast<uint32_t>(address) + len;
-  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= mask - 1) {
-    const int n = __builtin_ctz(mask);
+  for_each_sm_meeting(address, end, [&](int n) {
     const SmState& s = sm_[n];
-    const uint32_t s_end = static_cast<uint32_t>(s.start) + s.length;
-    // Writing the last byte hands the buffer over (ETG.1000.4 §6.7.1, §6.7.2).
-    if (!ecat_writes(s.control) || !(address < s_end && end >= s_end)) continue;
-    uint8_t& status = mem_[sm_base(n) + reg::kSmStatusOffset];
-    if (is_mailbox(s.control)) {
-      status = static_cast<uint8_t>((status & ~kStatusRead) | kStatusFull | kStatusWritten);
-      update_ecat_event(n);
-      update_al_event(n);
-      continue;
+    if (!sm::ecat_writes(s.control)) return;
+    sm_buffer_access(n, address, end, true);
+    // A completed buffer with the watchdog trigger enabled retriggers the process-data
+    // watchdog (ESC datasheet 0x0804 bit 6, 0x0420).
+    if (end >= static_cast<uint32_t>(s.start) + s.length && !sm::is_mailbox(s.control) &&
+        (s.control & sm::kControlWatchdog)) {
+      watchdog_trigger(pass_.port0_ns);
     }
-    // Buffered: the written buffer becomes the newest; report its index in bits 5:4.
-    status = static_cast<uint8_t>((status & ~(kStatusNoBuffer | kStatusRead)) |
-                                  (sm_[n].next_buffer << 4) | kStatusWritten);
-    sm_[n].next_buffer = static_cast<uint8_t>((sm_[n].next_buffer + 1) % 3);
-    update_ecat_event(n);
-    update_al_event(n);
-    if (s.control & 0x40) watchdog_trigger(pass_.port0_ns);
-  }
+  });
 }
+
+void Esc::sm_buffer_access(int n, uint32_t address, uint32_t end, bool filler) {
+  // Status 0x0805+8n (ETG.1000.4 §6.7; ESC datasheet 0x0805): bit 0 "written" is set when the
+  // filler completes the buffer and cleared when the drainer reads its first byte; bit 1
+  // "read" is set when the drainer completes it and cleared when the filler writes its first
+  // byte; bit 6/7 say a read/write access has opened the buffer and not yet reached its last
+  // byte. Completing a write hands the buffer over: a mailbox is full; in buffered mode the
+  // three-buffer exchange makes it the newest (bits 5:4 = its index). Completing a read of a
+  // mailbox empties it; of a buffered SM releases the buffer, so the next read opens the
+  // newest one.
+  SmState& s = sm_[n];
+  const bool first = address <= s.start;
+  const bool last = end >= static_cast<uint32_t>(s.start) + s.length;
+  const uint8_t open = filler ? sm::kStatusWriteOpen : sm::kStatusReadOpen;
+  uint8_t status = sm_status(n);
+  if (first)
+    status = static_cast<uint8_t>(status & ~(filler ? sm::kStatusRead : sm::kStatusWritten));
+  if (first && !last) status = static_cast<uint8_t>(status | open);
+  if (last) {
+    status = static_cast<uint8_t>(status & ~open);
+    if (filler && sm::is_mailbox(s.control)) {
+      status = static_cast<uint8_t>(status | sm::kStatusFull | sm::kStatusWritten);
+    } else if (filler) {
+      status = static_cast<uint8_t>((status & ~sm::kStatusNoBuffer) | (s.next_buffer << 4) |
+                                    sm::kStatusWritten);
+      s.next_buffer = static_cast<uint8_t>((s.next_buffer + 1) % 3);
+    } else if (sm::is_mailbox(s.control)) {
+      status = static_cast<uint8_t>((status & ~(sm::kStatusFull | sm::kStatusWritten)) |
+                                    sm::kStatusRead);
+    } else {
+      status = static_cast<uint8_t>(status | sm::kStatusRead);
+    }
+  }
+  sm_status(n) = status;
+  update_ecat_event(n);
+  update_al_event(n);
+}
+
+namespace {
+
+// Sets or clears bit `bit` of the little-endian event register at `address`: one byte.
+void set_event_bit(uint8_t* memory, uint32_t address, int bit, bool pending) {
+  uint8_t& byte = memory[address + static_cast<uint32_t>(bit >> 3)];
+  const auto mask = static_cast<uint8_t>(1u << (bit & 7));
+  byte = static_cast<uint8_t>(pending ? (byte | mask) : (byte & ~mask));
+}
+
+}  // namespace
 
 void Esc::update_ecat_event(int n) {
   // ECAT event request bits 4-11 mirror SyncManagers 0-7 whose ECAT event is enabled
@@ -153,14 +172,12 @@ void Esc::update_ecat_event(int n) {
   if (n >= 8) return;
   const SmState& s = sm_[n];
   bool pending = false;
+  uint8_t* const memory = mem_.data();
   if (s.enabled && (s.control & 0x10)) {
-    const uint8_t status = mem_[sm_base(n) + reg::kSmStatusOffset];
-    pending = ecat_writes(s.control) ? (status & kStatusRead) : (status & kStatusWritten);
+    const uint8_t status = memory[sm::base(n) + reg::kSmStatusOffset];
+    pending = (status & (sm::ecat_writes(s.control) ? sm::kStatusRead : sm::kStatusWritten)) != 0;
   }
-  uint16_t events = le::get16(&mem_[reg::kEcatEventRequest]);
-  const auto bit = static_cast<uint16_t>(0x0010 << n);
-  events = static_cast<uint16_t>(pending ? (events | bit) : (events & ~bit));
-  le::put16(&mem_[reg::kEcatEventRequest], events);
+  set_event_bit(memory, reg::kEcatEventRequest, 4 + n, pending);
 }
 
 void Esc::update_al_event(int n) {
@@ -169,14 +186,12 @@ void Esc::update_al_event(int n) {
   // the PDI until the PDI accesses the buffer's first byte (pdi.cpp).
   const SmState& s = sm_[n];
   bool pending = false;
+  uint8_t* const memory = mem_.data();
   if (s.enabled && (s.control & 0x20)) {
-    const uint8_t status = mem_[sm_base(n) + reg::kSmStatusOffset];
-    pending = ecat_writes(s.control) ? (status & kStatusWritten) : (status & kStatusRead);
+    const uint8_t status = memory[sm::base(n) + reg::kSmStatusOffset];
+    pending = (status & (sm::ecat_writes(s.control) ? sm::kStatusWritten : sm::kStatusRead)) != 0;
   }
-  uint32_t events = le::get32(&mem_[reg::kAlEventRequest]);
-  const uint32_t bit = 0x100u << n;
-  events = pending ? (events | bit) : (events & ~bit);
-  le::put32(&mem_[reg::kAlEventRequest], events);
+  set_event_bit(memory, reg::kAlEventRequest, 8 + n, pending);
 }
 
 }  // namespace rackcat::ecat

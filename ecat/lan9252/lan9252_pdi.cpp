@@ -140,4 +140,20 @@ void Lan9252Pdi::write(uint16_t address, std::span<const uint8_t> src) {
   }
 }
 
+void Lan9252Pdi::read_buffer(uint8_t /*sm*/, uint16_t address, std::span<uint8_t> dst) {
+  if (address < kProcessRam || dst.empty()) {
+    read(address, dst);
+    return;
+  }
+  pram_read(address, dst.data(), static_cast<uint16_t>(dst.size()));
+}
+
+void Lan9252Pdi::write_buffer(uint8_t /*sm*/, uint16_t address, std::span<const uint8_t> src) {
+  if (address < kProcessRam || src.empty()) {
+    write(address, src);
+    return;
+  }
+  pram_write(address, src.data(), static_cast<uint16_t>(src.size()));
+}
+
 }  // namespace rackcat::ecat

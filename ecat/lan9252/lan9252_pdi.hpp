@@ -30,6 +30,12 @@ class Lan9252Pdi final : public PdiPort {
 
   void read(uint16_t address, std::span<uint8_t> dst) override;
   void write(uint16_t address, std::span<const uint8_t> src) override;
+  // A SyncManager buffer in process RAM is one PRAM FIFO transfer of the whole buffer: the
+  // LAN9252 moves it between its FIFO and the EtherCAT core in address order, so the core's
+  // first/last-byte rules open and complete the buffer (LAN9252 datasheet, "process data RAM
+  // access"; ETG.1000.4 §6.7.2). A buffer in the register area goes byte-wise through the CSR.
+  void read_buffer(uint8_t sm, uint16_t address, std::span<uint8_t> dst) override;
+  void write_buffer(uint8_t sm, uint16_t address, std::span<const uint8_t> src) override;
   bool irq() const override { return bus_.irq(); }
 
   // Bus transactions so far (each SPI instruction counts once): what an access costs.

@@ -113,7 +113,10 @@ void Firmware::poll() {
     const bool sm0 = (events & kEventSm0) ||
                      (!(sm_taken_[0].control & reg::sm::kControlAlEvent) &&
                       (pdi_.read8(reg::sm::base(0) + reg::kSmStatusOffset) & reg::sm::kStatusFull));
-    mailbox_.service(state_, sm0, activation);
+    // Nothing for the mailbox unless the master wrote SM0, changed an SM (repeat request) or
+    // the device has a message to send: no SM1 status read, no protocol poll on the cyclic
+    // frames in between.
+    if (sm0 || activation || app_.mailbox_pending()) mailbox_.service(state_, sm0, activation);
   }
   update_polling();
 }

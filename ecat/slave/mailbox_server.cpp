@@ -85,7 +85,7 @@ void MailboxServer::send(size_t length) {
   // buffer: writing its last byte hands it to the master.
   counter_ = mailbox::next_counter(counter_);
   reply_[5] = static_cast<uint8_t>((reply_[5] & 0x8F) | (counter_ << 4));
-  pdi_.write(out_start_, std::span<const uint8_t>(reply_.data(), out_length_));
+  pdi_.write_buffer(1, out_start_, std::span<const uint8_t>(reply_.data(), out_length_));
   std::memcpy(last_.data(), reply_.data(), out_length_);
   last_len_ = length;
 }
@@ -100,7 +100,7 @@ void MailboxServer::serve_repeat() {
                 static_cast<uint8_t>(pdi_control | reg::sm::kPdiDeactivate));
     pdi_.write8(static_cast<uint16_t>(kSm1 + reg::kSmPdiControlOffset),
                 static_cast<uint8_t>(pdi_control & ~reg::sm::kPdiDeactivate));
-    pdi_.write(out_start_, std::span<const uint8_t>(last_.data(), out_length_));
+    pdi_.write_buffer(1, out_start_, std::span<const uint8_t>(last_.data(), out_length_));
   }
   pdi_.write8(static_cast<uint16_t>(kSm1 + reg::kSmPdiControlOffset),
               static_cast<uint8_t>((pdi_control & ~reg::sm::kPdiDeactivate) ^ reg::sm::kRepeatAck));
@@ -179,7 +179,7 @@ void MailboxServer::service(EsmState state, bool sm0_written, bool activation_ch
   size_t n = 0;
   if (sm0_written) {
     // Reading the whole SM0 buffer (its last byte) frees it for the master's next request.
-    pdi_.read(in_start_, std::span<uint8_t>(request_.data(), in_length_));
+    pdi_.read_buffer(0, in_start_, std::span<uint8_t>(request_.data(), in_length_));
     n = dispatch(std::span<const uint8_t>(request_.data(), in_length_), state);
   }
   for (size_t i = 0; n == 0 && i < protocol_count_; ++i) {

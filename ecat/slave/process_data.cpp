@@ -29,8 +29,9 @@ void Firmware::pd_start() {
 void Firmware::pd_outputs_written() {
   const Sm& s = sm_taken_[2];
   if (!s.enabled || outputs_.size() != s.length) return;
-  // Reading the buffer's first byte clears the event; the ESC gives us the newest buffer.
-  pdi_.read(s.start, outputs_);
+  // One block read of the whole buffer: its first byte clears the event and opens the newest
+  // buffer the master completed, its last byte releases it (ETG.1000.4 §6.7.2).
+  pdi_.read_buffer(2, s.start, outputs_);
   if (state_ == EsmState::Op) app_.on_outputs(outputs_);
 }
 
@@ -38,8 +39,9 @@ void Firmware::pd_produce_inputs() {
   const Sm& s = sm_taken_[3];
   if (!s.enabled || inputs_.size() != s.length || inputs_.empty()) return;
   app_.update_inputs(inputs_);
-  // Writing the last byte hands the buffer to the master.
-  pdi_.write(s.start, inputs_);
+  // One block write of the whole buffer: its last byte hands it to the master (the newest of
+  // the three buffers).
+  pdi_.write_buffer(3, s.start, inputs_);
 }
 
 void Firmware::pd_sync(int which) {

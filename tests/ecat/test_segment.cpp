@@ -114,6 +114,28 @@ TEST(Segment, FirmwareRunsOnlyForSlavesWithWork) {
   EXPECT_EQ(line.esc(2).al_status() & 0x0F, 0x02);
 }
 
+// The cyclic frame raises SM2/SM3 events in every slave, so every firmware runs; it exchanges
+// the process data and leaves the mailbox alone (no SM1 status read, no protocol poll) unless
+// the master wrote SM0 or the device has a message to send.
+TEST(Segment, CyclicFramesLeaveTheMailboxAlone) {
+  Line line(2);
+  line.to_op();
+  const std::vector<uint8_t> outputs(2 * kOutputBytes, 0x5A);
+  line.cycle(outputs);
+  for (size_t i = 0; i < 2; ++i) line.app(i).polls = 0;
+  const int outputs_before = line.app(0).outputs_count;
+  for (int k = 0; k < 5; ++k) line.cycle(outputs);
+  EXPECT_EQ(line.app(0).outputs_count - outputs_before, 5);
+  for (size_t i = 0; i < 2; ++i) EXPECT_EQ(line.app(i).polls, 0) << i;
+  line.app(1).pending_emergency = {0x0A, 0x00, 0x00, 0x00, 0x00, 0x13, 0x00, 0x10};
+  line.cycle(outputs);
+  EXPECT_EQ(line.app(0).polls, 0);
+  EXPECT_EQ(line.app(1).polls, 1);
+  const auto r = line.master->fprd(Line::station(1), kMbxInStart, kMbxSize);
+  EXPECT_EQ(r.wkc, 1);
+  EXPECT_EQ(r.data[5] & 0x0F, 0x03);
+}
+
 // Timers are scheduled through one next-event bound, not a walk over every ESC per frame: the
 // bound is never later than the earliest timer (a retriggered watchdog leaves it early), and
 // service() at the bound makes it exact again. The watchdog still expires on time.
