@@ -11,6 +11,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "base/fd_io.hpp"
+
 namespace rackcat::mdp {
 namespace {
 
@@ -57,22 +59,24 @@ std::string FileRoot::read(const std::string& relative, size_t max_bytes) const 
   struct stat st {};
   std::string out;
   const char* problem = nullptr;
+  int read_error = 0;
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
     problem = "not a regular file";
   } else if (static_cast<uint64_t>(st.st_size) > max_bytes) {
     problem = "too large";
   } else {
     out.resize(static_cast<size_t>(st.st_size));
-    size_t got = 0;
-    while (got < out.size()) {
-      const ssize_t n = ::read(fd, out.data() + got, out.size() - got);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;
-      got += static_cast<size_t>(n);
+    const ssize_t got = base::read_fully(fd, out.data(), out.size());
+    if (got < 0) {
+      read_error = errno;
+      out.clear();
+    } else {
+      out.resize(static_cast<size_t>(got));
     }
-    out.resize(got);
   }
   ::close(fd);
+  if (read_error != 0)
+    throw std::invalid_argument(name + ": cannot read: " + std::strerror(read_error));
   if (problem != nullptr) {
     throw std::invalid_argument(name + ": " + problem + " (at most " + std::to_string(max_bytes) +
                                 " bytes of a regular file)");

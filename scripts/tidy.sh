@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs clang-tidy with the repo's .clang-tidy over every library and app source (coe/ foe/ ecat/
+# Runs clang-tidy with the repo's .clang-tidy over every library and app source (base/ coe/ foe/ ecat/
 # mdp/ modules/ esi/ apps/), two files at a time. Any finding is an error: the script prints
 # each one, a one-line summary (files, findings, seconds) and exits 1.
 #
@@ -24,7 +24,7 @@ if [ ! -f "$BUILD/compile_commands.json" ]; then
   exit 2
 fi
 
-mapfile -t files < <(find coe foe ecat mdp modules esi device apps -name '*.cpp' -type f | sort)
+mapfile -t files < <(find base coe foe ecat mdp modules esi device apps -name '*.cpp' -type f | sort)
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 started=$(date +%s)

@@ -1,10 +1,10 @@
-#include "mdp/background_worker.hpp"
+#include "base/background_worker.hpp"
 
 #include <algorithm>
 
 #include "base/real_time.hpp"
 
-namespace rackcat::mdp {
+namespace rackcat::base {
 
 BackgroundWorker& BackgroundWorker::shared() {
   static auto* const worker = new BackgroundWorker();  // NOLINT(cppcoreguidelines-owning-memory)
@@ -57,4 +57,4 @@ void BackgroundWorker::run() {
   }
 }
 
-}  // namespace rackcat::mdp
+}  // namespace rackcat::base
