@@ -120,9 +120,9 @@ mailbox::Answer GenericDevice::FoeMailbox::on_request(const ecat::MailboxRequest
   return {r.length, mailbox::Error::None};
 }
 
-size_t GenericDevice::FoeMailbox::poll(std::span<uint8_t>) {
-  device.foe_->tick();
-  return 0;
+size_t GenericDevice::FoeMailbox::poll(std::span<uint8_t> reply) {
+  // Timeouts, a commit's end, and a read request's deferred first Data (foe_files.hpp).
+  return device.foe_->poll(reply);
 }
 
 mailbox::Answer GenericDevice::CoeMailbox::on_request(const ecat::MailboxRequest& request,

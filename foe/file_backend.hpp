@@ -22,13 +22,29 @@ struct CommitProgress {
   uint16_t entire = 0;
 };
 
+// Where a read request stands: the file is in `contents` (error None), refused (error), or
+// still being fetched off the device thread (busy).
+struct ReadProgress {
+  bool busy = false;
+  FoeError error = FoeError::None;
+};
+
 class FileBackend {
  public:
   virtual ~FileBackend() = default;
 
   // Read request: the whole file into `contents` (at most `max_size` bytes), or the refusal.
-  virtual FoeError read_file(std::string_view name, uint32_t password, size_t max_size,
-                             std::vector<uint8_t>& contents) = 0;
+  // A backend that reads its files elsewhere answers busy; then poll_read() is called (the
+  // mailbox poll) until it is not, and the server's first Data goes out only then: the read
+  // request's reply is deferred, not a Busy (ETG.1000.6 §5.8 has Busy answer a write's Data;
+  // SOEM's FOEread, for one, fails on a Busy in a read).
+  virtual ReadProgress read_file(std::string_view name, uint32_t password, size_t max_size,
+                                 std::vector<uint8_t>& contents) = 0;
+  virtual ReadProgress poll_read(std::vector<uint8_t>& /*contents*/) {
+    return {false, FoeError::NotDefined};
+  }
+  // The pending read is abandoned (a new request, a timeout, the mailbox restarted).
+  virtual void abort_read() {}
   // Write request: name, password and state checked, a write prepared (nothing visible yet).
   virtual FoeError begin_write(std::string_view name, uint32_t password) = 0;
   // The next data bytes of the open write, in order.

@@ -23,7 +23,7 @@ FoeServer::FoeServer(FileBackend& backend, FoeLimits limits, Clock clock)
 FoeServer::Result FoeServer::handle(std::span<const uint8_t> request, size_t request_capacity,
                                     std::span<uint8_t> reply) {
   // A transfer idle past its timeout is gone before this request is looked at.
-  if ((phase_ == Phase::Reading || phase_ == Phase::Writing) &&
+  if ((phase_ == Phase::Opening || phase_ == Phase::Reading || phase_ == Phase::Writing) &&
       clock_() - last_activity_ > limits_.transfer_timeout_ms) {
     end_transfer();
   }
@@ -69,18 +69,25 @@ void FoeServer::tick() {
   }
 }
 
+size_t FoeServer::poll(std::span<uint8_t> reply) {
+  tick();
+  if (phase_ != Phase::Opening || reply.size() < FoeHeader::kSize) return 0;
+  const ReadProgress p = backend_.poll_read(file_);
+  if (p.busy) return 0;
+  // The deferred reply of the read request: its first Data or the refusal.
+  return opened(p.error, reply);
+}
+
 void FoeServer::reset() {
-  if (phase_ == Phase::Committing) {
-    while (backend_.poll_commit().busy) {
-    }
-    phase_ = Phase::Idle;
-    return;
-  }
+  // A running commit is not waited for (that would hold the device thread): it completes on
+  // its own, and a request meanwhile finds it busy (write_request, read_request).
+  if (phase_ == Phase::Committing) return;
   end_transfer();
 }
 
 void FoeServer::end_transfer() {
   if (phase_ == Phase::Writing) backend_.abort_write();
+  if (phase_ == Phase::Opening) backend_.abort_read();
   phase_ = Phase::Idle;
   file_.clear();
   file_.shrink_to_fit();
@@ -107,14 +114,18 @@ size_t FoeServer::read_request(std::span<const uint8_t> raw, uint32_t password,
   end_transfer();  // a new request ends a stale one
   if (!name_of(raw, name_)) return error(FoeError::Illegal, reply);
   if (name_.empty()) return error(FoeError::NotFound, reply);
-  const FoeError e = backend_.read_file(name_, password, limits_.max_file_size, file_);
+  phase_ = Phase::Opening;
+  const ReadProgress p = backend_.read_file(name_, password, limits_.max_file_size, file_);
+  if (p.busy) return 0;  // the reply follows from poll()
+  return opened(p.error, reply);
+}
+
+size_t FoeServer::opened(FoeError e, std::span<uint8_t> reply) {
+  if (e == FoeError::None && file_.size() > limits_.max_file_size) e = FoeError::DiskFull;
   if (e != FoeError::None) {
+    phase_ = Phase::Idle;
     file_.clear();
     return error(e, reply);
-  }
-  if (file_.size() > limits_.max_file_size) {
-    file_.clear();
-    return error(FoeError::DiskFull, reply);
   }
   phase_ = Phase::Reading;
   packet_ = 0;
@@ -136,7 +147,7 @@ size_t FoeServer::send_data(std::span<uint8_t> reply) {
 
 size_t FoeServer::ack(uint32_t packet, std::span<uint8_t> reply) {
   if (phase_ != Phase::Reading) {
-    if (phase_ == Phase::Writing) end_transfer();
+    if (phase_ == Phase::Writing || phase_ == Phase::Opening) end_transfer();
     return error(FoeError::Illegal, reply);
   }
   if (packet != packet_) {

@@ -6,7 +6,8 @@
 // Services:
 // - Read request (password, file name) -> Data 1..n, each acknowledged by the master (Ack n)
 //   before Data n+1; a Data shorter than the reply mailbox allows is the last one (a file of
-//   an exact multiple ends with an empty Data).
+//   an exact multiple ends with an empty Data). A backend that fetches the file off the device
+//   thread defers the reply: Data 1 (or the Error) is then sent by poll() once it is there.
 // - Write request (password, file name) -> Ack 0; Data n (n = previous + 1) -> Ack n; the
 //   Data shorter than the request mailbox allows is the last: the file is committed, and while
 //   the commit runs every repeat of that Data gets Busy (Done, Entire), then Ack n or an Error.
@@ -59,20 +60,28 @@ class FoeServer {
   // Drops a transfer idle past its timeout and drives a finished commit to its end. Call now
   // and then (the mailbox poll).
   void tick();
-  // The mailbox restarted (ESM back to INIT): any transfer ends; a running commit completes.
+  // tick(), and the deferred reply of a read request whose file the backend fetched in the
+  // meantime (its first Data or the Error; 0: nothing to send). `reply` as for handle(). Call
+  // whenever the send mailbox is free (ecat::MailboxProtocol::poll).
+  size_t poll(std::span<uint8_t> reply);
+  // The mailbox restarted (ESM back to INIT): any transfer ends; a running commit completes on
+  // its own (never waited for here).
   void reset();
 
   bool idle() const { return phase_ == Phase::Idle; }
   bool committing() const { return phase_ == Phase::Committing; }
 
  private:
-  enum class Phase : uint8_t { Idle, Reading, Writing, Committing };
+  // Opening: a read request waits for its file (the backend's poll_read).
+  enum class Phase : uint8_t { Idle, Opening, Reading, Writing, Committing };
 
   size_t read_request(std::span<const uint8_t> name, uint32_t password, std::span<uint8_t> reply);
   size_t write_request(std::span<const uint8_t> name, uint32_t password, std::span<uint8_t> reply);
   size_t data(uint32_t packet, std::span<const uint8_t> bytes, size_t max_data,
               std::span<uint8_t> reply);
   size_t ack(uint32_t packet, std::span<uint8_t> reply);
+  // The read request's file is there (e None) or refused: the first Data or the Error.
+  size_t opened(FoeError e, std::span<uint8_t> reply);
   size_t send_data(std::span<uint8_t> reply);
   size_t progress_reply(const CommitProgress& p, std::span<uint8_t> reply);
   size_t error(FoeError code, std::span<uint8_t> reply);

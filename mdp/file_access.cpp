@@ -39,27 +39,28 @@ FoeError FileAccess::refuse(FoeError e, const std::string& why) {
   return e;
 }
 
-FoeError FileAccess::read_file(std::string_view name, uint32_t password, size_t max_size,
-                               std::vector<uint8_t>& contents) {
+foe::ReadProgress FileAccess::read_file(std::string_view name, uint32_t password, size_t max_size,
+                                        std::vector<uint8_t>& contents) {
   const EsmState state = hooks_.state();
   const bool firmware = is_firmware_file_name(name);
   if (!firmware && name != kParameterFileName) {
-    return refuse(FoeError::NotFound, "no file " + std::string(name));
+    return {false, refuse(FoeError::NotFound, "no file " + std::string(name))};
   }
-  if (password != password_) return refuse(FoeError::NoRights, "wrong password");
+  if (password != password_) return {false, refuse(FoeError::NoRights, "wrong password")};
   if (firmware) {
     if (state != EsmState::Boot) {
-      return refuse(FoeError::BootstrapOnly, "firmware is read in BOOT only");
+      return {false, refuse(FoeError::BootstrapOnly, "firmware is read in BOOT only")};
     }
     contents = hooks_.running_firmware();
   } else {
     if (state == EsmState::Boot) {
-      return refuse(FoeError::NotBootstrap, "parameters are not served in BOOT");
+      return {false, refuse(FoeError::NotBootstrap, "parameters are not served in BOOT")};
     }
     contents = hooks_.parameter_file();
   }
-  if (contents.size() > max_size) return refuse(FoeError::DiskFull, "file larger than FoE allows");
-  return FoeError::None;
+  if (contents.size() > max_size)
+    return {false, refuse(FoeError::DiskFull, "file larger than FoE allows")};
+  return {false, FoeError::None};
 }
 
 FoeError FileAccess::begin_write(std::string_view name, uint32_t password) {

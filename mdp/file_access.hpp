@@ -48,8 +48,8 @@ class FileAccess final : public foe::FileBackend {
  public:
   FileAccess(FirmwareStore& store, uint32_t password, FileAccessHooks hooks);
 
-  foe::FoeError read_file(std::string_view name, uint32_t password, size_t max_size,
-                          std::vector<uint8_t>& contents) override;
+  foe::ReadProgress read_file(std::string_view name, uint32_t password, size_t max_size,
+                              std::vector<uint8_t>& contents) override;
   foe::FoeError begin_write(std::string_view name, uint32_t password) override;
   foe::FoeError write_data(std::span<const uint8_t> data) override;
   foe::CommitProgress commit() override;

@@ -1,8 +1,9 @@
 // Feeds FoE requests to one FoE server over an in-memory file backend. Input: byte 0 = receive
 // mailbox data size - 7 (7..262), byte 1 = send mailbox data size - 7, byte 2 bit 0 = commits
-// answer Busy once, then requests as [length byte][bytes] (FoE header and data, ETG.1000.6
-// §5.8). Checks every reply: it fits the send mailbox, is one of the slave's OpCodes (Data,
-// Ack, Error, Busy), and an Error carries a code of the 0x8000 range.
+// answer Busy once and reads are deferred once (FoeServer::poll sends their first reply), then
+// requests as [length byte][bytes] (FoE header and data, ETG.1000.6 §5.8). Checks every reply: it
+// fits the send mailbox, is one of the slave's OpCodes (Data, Ack, Error, Busy), and an Error
+// carries a code of the 0x8000 range.
 #include <cstdlib>
 #include <map>
 #include <string>
@@ -23,15 +24,30 @@ class Backend : public FileBackend {
   std::vector<uint8_t> pending;
   int busy = 0;
 
-  FoeError read_file(std::string_view name, uint32_t password, size_t max,
-                     std::vector<uint8_t>& out) override {
-    if (password == 1) return FoeError::NoRights;
-    auto it = files.find(std::string(name));
-    if (it == files.end()) return FoeError::NotFound;
-    if (it->second.size() > max) return FoeError::DiskFull;
-    out = it->second;
-    return FoeError::None;
+  std::string reading;
+  size_t read_max = 0;
+  int read_busy = 0;
+
+  ReadProgress read_file(std::string_view name, uint32_t password, size_t max,
+                         std::vector<uint8_t>& out) override {
+    if (password == 1) return {false, FoeError::NoRights};
+    reading = std::string(name);
+    read_max = max;
+    read_busy = busy_once ? 1 : 0;
+    return poll_read(out);
   }
+  ReadProgress poll_read(std::vector<uint8_t>& out) override {
+    if (read_busy > 0) {
+      --read_busy;
+      return {true, FoeError::None};
+    }
+    auto it = files.find(reading);
+    if (it == files.end()) return {false, FoeError::NotFound};
+    if (it->second.size() > read_max) return {false, FoeError::DiskFull};
+    out = it->second;
+    return {false, FoeError::None};
+  }
+  void abort_read() override { reading.clear(); }
   FoeError begin_write(std::string_view name, uint32_t password) override {
     if (password == 1) return FoeError::NoRights;
     open = std::string(name);
@@ -57,6 +73,24 @@ class Backend : public FileBackend {
   void abort_write() override { pending.clear(); }
 };
 
+// Every reply fits the send mailbox and is one the slave may send.
+void check_reply(size_t length, const std::vector<uint8_t>& reply) {
+  if (length == 0) return;
+  if (length > reply.size() || length < FoeHeader::kSize) std::abort();
+  const auto h = FoeHeader::decode(reply);
+  switch (static_cast<OpCode>(h->opcode)) {
+    case OpCode::Data:
+    case OpCode::Ack:
+    case OpCode::Busy:
+      break;
+    case OpCode::Error:
+      if (h->value < 0x8000 || h->value > 0x8012) std::abort();
+      break;
+    default:
+      std::abort();
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -75,21 +109,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     now += 100;
     const auto r = server.handle(request, capacity, reply);
     if (r.too_short && (r.length != 0 || request.size() >= FoeHeader::kSize)) std::abort();
-    if (r.length == 0) continue;
-    if (r.length > reply.size() || r.length < FoeHeader::kSize) std::abort();
-    const auto h = FoeHeader::decode(reply);
-    switch (static_cast<OpCode>(h->opcode)) {
-      case OpCode::Data:
-      case OpCode::Ack:
-      case OpCode::Busy:
-        break;
-      case OpCode::Error:
-        if (h->value < 0x8000 || h->value > 0x8012) std::abort();
-        break;
-      default:
-        std::abort();
-    }
-    server.tick();
+    check_reply(r.length, reply);
+    // The mailbox poll (a deferred read's first reply, timeouts, a commit's end).
+    check_reply(server.poll(reply), reply);
   }
   return 0;
 }

@@ -34,13 +34,26 @@ class MemoryBackend : public FileBackend {
   bool finished = false;
   FoeError finished_error = FoeError::None;
 
-  FoeError read_file(std::string_view name, uint32_t pw, size_t, Bytes& out) override {
-    if (pw != password) return FoeError::NoRights;
-    auto it = files.find(std::string(name));
-    if (it == files.end()) return FoeError::NotFound;
-    out = it->second;
-    return FoeError::None;
+  int read_busy_polls = 0;  // how many times read_file/poll_read answer busy
+  int read_aborts = 0;
+  std::string reading;
+
+  ReadProgress read_file(std::string_view name, uint32_t pw, size_t, Bytes& out) override {
+    if (pw != password) return {false, FoeError::NoRights};
+    reading = std::string(name);
+    return poll_read(out);
   }
+  ReadProgress poll_read(Bytes& out) override {
+    if (read_busy_polls > 0) {
+      --read_busy_polls;
+      return {true, FoeError::None};
+    }
+    auto it = files.find(reading);
+    if (it == files.end()) return {false, FoeError::NotFound};
+    out = it->second;
+    return {false, FoeError::None};
+  }
+  void abort_read() override { ++read_aborts; }
   FoeError begin_write(std::string_view name, uint32_t pw) override {
     if (pw != password) return FoeError::NoRights;
     if (begin_error != FoeError::None) return begin_error;
@@ -236,6 +249,59 @@ TEST_F(FoeServerTest, ReadOfAnExactMultipleEndsWithAnEmptyData) {
   EXPECT_EQ(send({0x04, 0x00, 0x01, 0x00, 0x00, 0x00}),
             (Bytes{0x03, 0x00, 0x02, 0x00, 0x00, 0x00}));
   EXPECT_EQ(send({0x04, 0x00, 0x02, 0x00, 0x00, 0x00}), Bytes{});
+}
+
+// A backend that fetches the file elsewhere (device/foe_files.hpp) answers busy: the read
+// request gets no reply until poll() finds the file there, then Data 1 goes out from poll().
+TEST_F(FoeServerTest, ReadOfAFileFetchedElsewhereDefersTheFirstData) {
+  backend.files["fileR"] = cat({}, "0123456789abc");
+  backend.read_busy_polls = 2;  // busy for the request and the first poll
+  EXPECT_EQ(send(cat({0x01, 0x00, 0x78, 0x56, 0x34, 0x12}, "fileR")), Bytes{});
+  EXPECT_FALSE(server.idle());  // the mailbox stays pending (GenericDevice::mailbox_pending)
+  Bytes reply(kCapacity, 0xEE);
+  EXPECT_EQ(server.poll(reply), 0u);
+  ASSERT_EQ(server.poll(reply), FoeHeader::kSize + 10);
+  EXPECT_EQ(reply, cat({0x03, 0x00, 0x01, 0x00, 0x00, 0x00}, "0123456789"));
+  EXPECT_EQ(server.poll(reply), 0u);  // sent once
+  EXPECT_EQ(send({0x04, 0x00, 0x01, 0x00, 0x00, 0x00}),
+            cat({0x03, 0x00, 0x02, 0x00, 0x00, 0x00}, "abc"));
+  EXPECT_EQ(send({0x04, 0x00, 0x02, 0x00, 0x00, 0x00}), Bytes{});
+  EXPECT_TRUE(server.idle());
+}
+
+TEST_F(FoeServerTest, DeferredReadOfAMissingFileAnswersItsErrorFromPoll) {
+  backend.read_busy_polls = 2;  // busy for the request and the first poll
+  EXPECT_EQ(send(cat({0x01, 0x00, 0x78, 0x56, 0x34, 0x12}, "nope")), Bytes{});
+  Bytes reply(64, 0xEE);
+  EXPECT_EQ(server.poll(reply), 0u);
+  reply.resize(server.poll(reply));
+  EXPECT_EQ(reply, cat({0x05, 0x00, 0x01, 0x80, 0x00, 0x00}, "Not found"));
+  EXPECT_TRUE(server.idle());
+}
+
+TEST_F(FoeServerTest, DeferredReadIsAbandonedByANewRequestATimeoutOrAReset) {
+  backend.files["fileR"] = cat({}, "x");
+  backend.read_busy_polls = 100;
+  const Bytes rrq = cat({0x01, 0x00, 0x78, 0x56, 0x34, 0x12}, "fileR");
+  ASSERT_EQ(send(rrq), Bytes{});
+  EXPECT_EQ(send(kWrqFileA), kAck0);  // a new request: the read is dropped
+  EXPECT_EQ(backend.read_aborts, 1);
+  ASSERT_EQ(send(rrq), Bytes{});
+  EXPECT_EQ(backend.aborts, 1);  // ...and so was the write
+  now += 10'001;
+  Bytes reply(kCapacity);
+  EXPECT_EQ(server.poll(reply), 0u);
+  EXPECT_TRUE(server.idle());
+  EXPECT_EQ(backend.read_aborts, 2);
+  ASSERT_EQ(send(rrq), Bytes{});
+  server.reset();
+  EXPECT_TRUE(server.idle());
+  EXPECT_EQ(backend.read_aborts, 3);
+  // An Ack before any Data is out of turn.
+  ASSERT_EQ(send(rrq), Bytes{});
+  EXPECT_EQ(send({0x04, 0x00, 0x01, 0x00, 0x00, 0x00}, 64),
+            cat({0x05, 0x00, 0x04, 0x80, 0x00, 0x00}, "Illegal"));
+  EXPECT_EQ(backend.read_aborts, 4);
 }
 
 TEST_F(FoeServerTest, ReadOfAMissingFileIsNotFound) {

@@ -220,18 +220,18 @@ class FileAccessTest : public FirmwareStoreTest {
 
 TEST_F(FileAccessTest, StatesAndPasswordsPerFile) {
   Bytes out;
-  EXPECT_EQ(files.read_file("parameters.bin", 41, 100, out), FoeError::NoRights);
-  EXPECT_EQ(files.read_file("other.bin", 42, 100, out), FoeError::NotFound);
-  EXPECT_EQ(files.read_file("parameters.bin", 42, 100, out), FoeError::None);
+  EXPECT_EQ(files.read_file("parameters.bin", 41, 100, out).error, FoeError::NoRights);
+  EXPECT_EQ(files.read_file("other.bin", 42, 100, out).error, FoeError::NotFound);
+  EXPECT_EQ(files.read_file("parameters.bin", 42, 100, out).error, FoeError::None);
   EXPECT_EQ(out, Bytes{'P'});
-  EXPECT_EQ(files.read_file("rackcat-x.rfw", 42, 100, out), FoeError::BootstrapOnly);
+  EXPECT_EQ(files.read_file("rackcat-x.rfw", 42, 100, out).error, FoeError::BootstrapOnly);
   EXPECT_EQ(files.begin_write("rackcat-x.rfw", 42), FoeError::BootstrapOnly);
   state = EsmState::SafeOp;
   EXPECT_EQ(files.begin_write("parameters.bin", 42), FoeError::AccessDenied);
   state = EsmState::Boot;
   EXPECT_EQ(files.begin_write("parameters.bin", 42), FoeError::NotBootstrap);
-  EXPECT_EQ(files.read_file("parameters.bin", 42, 100, out), FoeError::NotBootstrap);
-  EXPECT_EQ(files.read_file("rackcat-x.rfw", 42, 100, out), FoeError::None);
+  EXPECT_EQ(files.read_file("parameters.bin", 42, 100, out).error, FoeError::NotBootstrap);
+  EXPECT_EQ(files.read_file("rackcat-x.rfw", 42, 100, out).error, FoeError::None);
   EXPECT_EQ(out, Bytes{'F'});
   EXPECT_EQ(files.begin_write("rackcat-x.rfw", 42), FoeError::None);
   const Bytes f = pack_abc();
