@@ -49,6 +49,33 @@ void to_preop(RackSlave& slave) {
   slave.on_state_changed(EsmState::Init, EsmState::PreOp);
 }
 
+// The restart handler counts in `restarts` (the ESC restart that follows a device reset).
+void count_restarts(RackSlave& slave, int& restarts) {
+  slave.set_restart_handler([&slave, &restarts] {
+    slave.finish_device_reset();
+    ++restarts;
+  });
+}
+
+// 0xFBF0:01 device reset with its signature "reset" (docs/MDP.md command table): 0 or the SDO
+// abort code.
+uint32_t request_device_reset(mdp::testing::SdoClient& sdo) {
+  const std::vector<uint8_t> reset{0x74, 0x65, 0x73, 0x65, 0x72, 0x00};
+  return sdo.download(0xFBF0, 1, reset);
+}
+
+// The reset runs on the device's parameter thread; the ESC polls the mailbox each cycle. The
+// restart comes on the poll after the device has reset (SM1 free: the answer was read). Polls
+// until then (5 s at most).
+void poll_until_restarted(RackSlave& slave, const int& restarts) {
+  std::array<uint8_t, 128> reply{};
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (restarts == 0 && std::chrono::steady_clock::now() < deadline) {
+    slave.coe_mailbox().poll(reply);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
+
 uint32_t sii_u32(std::span<const uint8_t> sii,
                  size_t word) {  // little-endian u32 at a word address
   return static_cast<uint32_t>(sii[2 * word]) | (static_cast<uint32_t>(sii[2 * word + 1]) << 8) |
@@ -118,25 +145,14 @@ TEST_F(RackSlaveTest, StateChangesReachTheDevice) {
 TEST_F(RackSlaveTest, DeviceResetRestartsTheEscOnceTheAnswerIsRead) {
   RackSlave slave(default_rack(), dir_.string(), 0);
   int restarts = 0;
-  slave.set_restart_handler([&] {
-    slave.finish_device_reset();
-    ++restarts;
-  });
+  count_restarts(slave, restarts);
   to_preop(slave);
   mdp::testing::SdoClient sdo(slave.device());
-  // 0xFBF0:01 device reset with its signature (docs/MDP.md command table).
-  const std::vector<uint8_t> reset{0x74, 0x65, 0x73, 0x65, 0x72, 0x00};
-  EXPECT_EQ(sdo.download(0xFBF0, 1, reset), 0u);
+  EXPECT_EQ(request_device_reset(sdo), 0u);
   EXPECT_EQ(restarts, 0);
-  // The reset runs on the device's parameter thread; the ESC polls the mailbox each cycle. The
-  // restart comes on the poll after the device has reset (SM1 free: the answer was read).
-  std::array<uint8_t, 128> reply{};
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (restarts == 0 && std::chrono::steady_clock::now() < deadline) {
-    slave.coe_mailbox().poll(reply);
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  poll_until_restarted(slave, restarts);
   EXPECT_EQ(restarts, 1);
+  std::array<uint8_t, 128> reply{};
   slave.coe_mailbox().poll(reply);
   EXPECT_EQ(restarts, 1);  // once per reset
 }
@@ -157,20 +173,11 @@ TEST_F(RackSlaveTest, DeviceResetPutsTheNewFirmwareRevisionIntoTheSii) {
       .write(reinterpret_cast<const char*>(file->data()),
              static_cast<std::streamsize>(file->size()));
   int restarts = 0;
-  slave.set_restart_handler([&] {
-    slave.finish_device_reset();
-    ++restarts;
-  });
+  count_restarts(slave, restarts);
   to_preop(slave);
   mdp::testing::SdoClient sdo(slave.device());
-  const std::vector<uint8_t> reset{0x74, 0x65, 0x73, 0x65, 0x72, 0x00};
-  EXPECT_EQ(sdo.download(0xFBF0, 1, reset), 0u);
-  std::array<uint8_t, 128> reply{};
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (restarts == 0 && std::chrono::steady_clock::now() < deadline) {
-    slave.coe_mailbox().poll(reply);
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  EXPECT_EQ(request_device_reset(sdo), 0u);
+  poll_until_restarted(slave, restarts);
   ASSERT_EQ(restarts, 1);
   EXPECT_EQ(sii_u32(slave.eeprom(), 0x0C), 0x00020001u);
   EXPECT_EQ(sdo.read_u(0x1018, 3), 0x00020001u);

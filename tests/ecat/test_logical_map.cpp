@@ -7,27 +7,12 @@
 
 #include "ecat/logical_map.hpp"
 #include "tests/ecat/test_master.hpp"
+#include "tests/support/fmmu_entry.hpp"
 
 namespace rackcat::ecat::test {
 namespace {
 
-std::vector<uint8_t> fmmu(uint32_t logical, uint16_t len, uint8_t start_bit, uint8_t stop_bit,
-                          uint16_t physical, uint8_t physical_bit, uint8_t type,
-                          uint8_t enable = 0x01) {
-  std::vector<uint8_t> f = bytes32(logical);
-  const auto l = bytes16(len);
-  f.insert(f.end(), l.begin(), l.end());
-  f.push_back(start_bit);
-  f.push_back(stop_bit);
-  const auto p = bytes16(physical);
-  f.insert(f.end(), p.begin(), p.end());
-  f.push_back(physical_bit);
-  f.push_back(type);
-  f.push_back(enable);
-  f.resize(16, 0);
-  return f;
-}
-
+using rackcat::testing::fmmu_entry;
 constexpr uint8_t kRead = 1;
 constexpr uint8_t kWrite = 2;
 
@@ -52,8 +37,8 @@ struct LogicalMapTest : ::testing::Test {
 TEST_F(LogicalMapTest, OverlappingFmmusOfTwoEscsAnswerInLineOrder) {
   // Slave 0 reads logical 0x1000-0x1001, slave 1 reads 0x1001-0x1002: byte 0x1001 is mapped by
   // both; the frame passes slave 0 first, so slave 1's byte is what comes back.
-  map(0, 0, fmmu(0x1000, 2, 0, 7, 0x1100, 0, kRead));
-  map(1, 0, fmmu(0x1001, 2, 0, 7, 0x1100, 0, kRead));
+  map(0, 0, fmmu_entry(0x1000, 2, 0, 7, 0x1100, 0, kRead));
+  map(1, 0, fmmu_entry(0x1001, 2, 0, 7, 0x1100, 0, kRead));
   poke(0, 0x1100, {0x10, 0x11});
   poke(1, 0x1100, {0x21, 0x22});
   const auto r = line.master->send_logical(Command::Lrd, 0x1000, {0xEE, 0xEE, 0xEE, 0xEE});
@@ -69,9 +54,9 @@ TEST_F(LogicalMapTest, OverlappingFmmusOfTwoEscsAnswerInLineOrder) {
 TEST_F(LogicalMapTest, ReadAndWriteFmmusOfOneEscCountOnceEach) {
   // FMMU0 writes logical 0x0-0x1 to 0x1100, FMMU1 reads 0x2-0x3 from 0x1200, FMMU2 writes
   // 0x4 to 0x1300: one LRW over all of it counts +1 (read) +2 (write) for this ESC, once.
-  map(0, 0, fmmu(0x0, 2, 0, 7, 0x1100, 0, kWrite));
-  map(0, 1, fmmu(0x2, 2, 0, 7, 0x1200, 0, kRead));
-  map(0, 2, fmmu(0x4, 1, 0, 7, 0x1300, 0, kWrite));
+  map(0, 0, fmmu_entry(0x0, 2, 0, 7, 0x1100, 0, kWrite));
+  map(0, 1, fmmu_entry(0x2, 2, 0, 7, 0x1200, 0, kRead));
+  map(0, 2, fmmu_entry(0x4, 1, 0, 7, 0x1300, 0, kWrite));
   poke(0, 0x1200, {0xC1, 0xC2});
   const auto r = line.master->send_logical(Command::Lrw, 0x0, {0xA1, 0xA2, 0x00, 0x00, 0xA5});
   EXPECT_EQ(r.wkc, 3);
@@ -89,7 +74,7 @@ TEST_F(LogicalMapTest, ReadAndWriteFmmusOfOneEscCountOnceEach) {
 }
 
 TEST_F(LogicalMapTest, AnFmmuDisabledAndReEnabledMidRun) {
-  map(1, 3, fmmu(0x40, 1, 0, 7, 0x1100, 0, kRead));
+  map(1, 3, fmmu_entry(0x40, 1, 0, 7, 0x1100, 0, kRead));
   poke(1, 0x1100, {0x5A});
   EXPECT_EQ(line.master->send_logical(Command::Lrd, 0x40, {0}).wkc, 1);
   // Enable 0x063C bit 0 cleared: the ESC no longer answers; the map follows.
@@ -103,15 +88,15 @@ TEST_F(LogicalMapTest, AnFmmuDisabledAndReEnabledMidRun) {
   EXPECT_EQ(r.wkc, 1);
   EXPECT_EQ(r.data, (std::vector<uint8_t>{0x5A}));
   // Moved to another logical address: the old one is empty, the new one answers.
-  map(1, 3, fmmu(0x80, 1, 0, 7, 0x1100, 0, kRead));
+  map(1, 3, fmmu_entry(0x80, 1, 0, 7, 0x1100, 0, kRead));
   EXPECT_EQ(line.master->send_logical(Command::Lrd, 0x40, {0}).wkc, 0);
   EXPECT_EQ(line.master->send_logical(Command::Lrd, 0x80, {0}).wkc, 1);
 }
 
 TEST_F(LogicalMapTest, BitGranularFmmusOfTwoEscsShareOneLogicalByte) {
   // Logical 0x10 bits 0-3 -> slave 0's 0x1100 bits 0-3; bits 4-7 -> slave 1's 0x1100 bits 0-3.
-  map(0, 0, fmmu(0x10, 1, 0, 3, 0x1100, 0, kWrite));
-  map(1, 0, fmmu(0x10, 1, 4, 7, 0x1100, 0, kWrite));
+  map(0, 0, fmmu_entry(0x10, 1, 0, 3, 0x1100, 0, kWrite));
+  map(1, 0, fmmu_entry(0x10, 1, 4, 7, 0x1100, 0, kWrite));
   EXPECT_EQ(line.master->send_logical(Command::Lwr, 0x10, {0xA5}).wkc, 2);
   EXPECT_EQ(line.esc(0).read8(0x1100), 0x05);
   EXPECT_EQ(line.esc(1).read8(0x1100), 0x0A);
@@ -119,20 +104,20 @@ TEST_F(LogicalMapTest, BitGranularFmmusOfTwoEscsShareOneLogicalByte) {
   EXPECT_EQ(line.master->send_logical(Command::Lwr, 0x11, {0xFF}).wkc, 0);
   // Logical 0x20 bit 4 .. 0x21 bit 3 on slave 2: a datagram on 0x21 alone meets bits 0-3 of it,
   // one on 0x22 does not.
-  map(2, 0, fmmu(0x20, 2, 4, 3, 0x1100, 0, kRead));
+  map(2, 0, fmmu_entry(0x20, 2, 4, 3, 0x1100, 0, kRead));
   poke(2, 0x1100, {0xDA});
   auto r = line.master->send_logical(Command::Lrd, 0x21, {0xF0});
   EXPECT_EQ(r.wkc, 1);
   EXPECT_EQ(r.data, (std::vector<uint8_t>{0xFD}));  // bits 0-3 <- physical bits 4-7 (0xD)
   EXPECT_EQ(line.master->send_logical(Command::Lrd, 0x22, {0}).wkc, 0);
   // One byte whose stop bit lies before its start bit maps nothing.
-  map(2, 1, fmmu(0x30, 1, 4, 3, 0x1200, 0, kRead));
+  map(2, 1, fmmu_entry(0x30, 1, 4, 3, 0x1200, 0, kRead));
   EXPECT_EQ(line.master->send_logical(Command::Lrd, 0x30, {0}).wkc, 0);
 }
 
 TEST_F(LogicalMapTest, ARangeStraddlingTwoEscs) {
-  map(0, 0, fmmu(0x100, 4, 0, 7, 0x1100, 0, kRead));
-  map(1, 0, fmmu(0x104, 4, 0, 7, 0x1100, 0, kRead));
+  map(0, 0, fmmu_entry(0x100, 4, 0, 7, 0x1100, 0, kRead));
+  map(1, 0, fmmu_entry(0x104, 4, 0, 7, 0x1100, 0, kRead));
   poke(0, 0x1100, {0x00, 0x01, 0x02, 0x03});
   poke(1, 0x1100, {0x10, 0x11, 0x12, 0x13});
   const auto r = line.master->send_logical(Command::Lrd, 0x102, {0, 0, 0, 0});
@@ -145,12 +130,12 @@ TEST_F(LogicalMapTest, ARangeStraddlingTwoEscs) {
 TEST_F(LogicalMapTest, AnFmmuWrittenInTheSameFrameAsTheLogicalDatagram) {
   // Frame: FPWR of slave 1's FMMU0, then an LRD over it. Slave 1 sees its FMMU before the LRD
   // reaches it (the frame passes each ESC datagram by datagram), so it answers in this frame.
-  map(0, 0, fmmu(0x200, 1, 0, 7, 0x1100, 0, kRead));
+  map(0, 0, fmmu_entry(0x200, 1, 0, 7, 0x1100, 0, kRead));
   poke(0, 0x1100, {0x0A});
   poke(1, 0x1100, {0x1B});
   EXPECT_EQ(line.master->send_logical(Command::Lrd, 0x200, {0, 0}).wkc, 1);  // map built
   FrameBuilder frame;
-  frame.add(Command::Fpwr, Line::station(1), 0x0600, fmmu(0x201, 1, 0, 7, 0x1100, 0, kRead));
+  frame.add(Command::Fpwr, Line::station(1), 0x0600, fmmu_entry(0x201, 1, 0, 7, 0x1100, 0, kRead));
   frame.add_logical(Command::Lrd, 0x200, {0, 0});
   const auto replies = line.master->send_frame(frame);
   ASSERT_EQ(replies.size(), 2u);
@@ -163,7 +148,7 @@ TEST_F(LogicalMapTest, ManyLogicalDatagramsInOneFrame) {
   // More distinct logical datagrams than the map resolves per frame: the rest are answered
   // all the same (through each ESC's own FMMUs).
   for (size_t s = 0; s < 3; ++s) {
-    map(s, 0, fmmu(static_cast<uint32_t>(0x300 + s), 1, 0, 7, 0x1100, 0, kRead));
+    map(s, 0, fmmu_entry(static_cast<uint32_t>(0x300 + s), 1, 0, 7, 0x1100, 0, kRead));
     poke(s, 0x1100, {static_cast<uint8_t>(0xB0 + s)});
   }
   FrameBuilder frame;

@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "tests/ecat/test_application.hpp"
+#include "tests/support/fmmu_entry.hpp"
 
 namespace rackcat::ecat::test {
 
@@ -208,20 +209,7 @@ void TestMaster::config_map() {
     fpwr(station, 0x0810, sm2);
     fpwr(station, 0x0818, sm3);
     auto fmmu = [](uint32_t log, uint16_t len, uint16_t phys, uint8_t type) {
-      std::vector<uint8_t> f = bytes32(log);
-      auto l = bytes16(len);
-      f.insert(f.end(), l.begin(), l.end());
-      f.push_back(0);
-      f.push_back(7);
-      auto p = bytes16(phys);
-      f.insert(f.end(), p.begin(), p.end());
-      f.push_back(0);
-      f.push_back(type);
-      f.push_back(1);
-      f.push_back(0);
-      f.push_back(0);
-      f.push_back(0);
-      return f;
+      return rackcat::testing::fmmu_entry(log, len, 0, 7, phys, 0, type);
     };
     fpwr(station, 0x0600, fmmu(out_at[k], kOutputBytes, kOutputsStart, 2));
     fpwr(station, 0x0610, fmmu(in_at[k], kInputBytes, kInputsStart, 1));

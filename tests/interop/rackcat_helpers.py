@@ -258,6 +258,27 @@ def open_master(iface, expected_slaves=1):
     return master
 
 
+def ride_through_rim_loss(slave, on_emergency=lambda e: None):
+    """Prepares `slave` (PREOP) for a RIM going offline: Detect Modules Override 0 (0x2000:0B,
+    guide Table 23) takes the RIM's modules out of the rack instead of refusing it; the RIM
+    loss's Emergency 0xA001 goes to on_emergency (dropped by default)."""
+    slave.add_emergency_callback(on_emergency)
+    slave.sdo_write(0x2000, 0x0B, b"\x00")
+
+
+def device_reset(master, slave, timeout_s=3.0):
+    """0xFBF0:01 device reset with its signature (docs/MDP.md commands): returns once the
+    slave reports INIT (its ESC restarted), fails after timeout_s."""
+    slave.sdo_write(0xFBF0, 1, b"teser\x00")
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        master.read_state()
+        if slave.state == pysoem.INIT_STATE:
+            break
+        time.sleep(0.01)
+    assert slave.state == pysoem.INIT_STATE, (hex(slave.state), hex(slave.al_status))
+
+
 def go(master, state, timeout_us=3_000_000):
     master.state = state
     master.write_state()

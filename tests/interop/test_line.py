@@ -42,6 +42,33 @@ def esi_devices():
     return out
 
 
+def assert_esi_identities(slaves, esi):
+    """Positions 0-3 of the line (LINE, and the ENI of it) are the ESI devices: identity and
+    name as their ESI says."""
+    for pos, order in enumerate(["RC1100", "RC1008", "RC2008", "RC3102"]):
+        code, rev, name, _ = esi[order]
+        assert (slaves[pos].man, slaves[pos].id, slaves[pos].rev) == (0x0E1C, code, rev), pos
+        assert slaves[pos].name == name, (pos, slaves[pos].name)
+
+
+def open_line(ecat_segment, tmp_path, line_args, slaves):
+    """`rackcat run` with `line_args` (--line FILE, or --eni FILE --esi-dir DIR) on a fresh
+    segment, and pysoem opened on it, which has found the line's `slaves` slaves. Returns
+    (master, slave process)."""
+    q = shlex.quote  # the template is split like a shell line; paths may hold spaces
+    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} {line_args} --no-control "
+           f"--no-pty --state-dir {q(str(tmp_path / 'state'))}")
+    iface, slave = ecat_segment(slaves=slaves, cmd=cmd, pcap=False)
+    master = pysoem.Master()
+    master.open(iface)
+    try:
+        assert master.config_init() == slaves
+    except BaseException:
+        master.close()
+        raise
+    return master, slave
+
+
 def cycle(master, n=1):
     wkc = 0
     for _ in range(n):
@@ -74,20 +101,12 @@ def test_line_reaches_op_with_esi_identities_and_loopback(ecat_segment, tmp_path
     shutil.copy(DATA / "rackcat-test-devices.xml", work)
     shutil.copy(REPO / "examples/tiny-rack.yaml", work)
     (work / "line.yaml").write_text(LINE)
-    q = shlex.quote  # the template is split like a shell line; paths may hold spaces
-    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --line {q(str(work / 'line.yaml'))} "
-           f"--no-control --no-pty --state-dir {q(str(tmp_path / 'state'))}")
-    iface, slave = ecat_segment(slaves=5, cmd=cmd, pcap=False)
+    master, slave = open_line(ecat_segment, tmp_path,
+                              f"--line {shlex.quote(str(work / 'line.yaml'))}", 5)
     esi = esi_devices()
-    master = pysoem.Master()
-    master.open(iface)
     try:
-        assert master.config_init() == 5
         s = master.slaves
-        for pos, order in enumerate(["RC1100", "RC1008", "RC2008", "RC3102"]):
-            code, rev, name, _ = esi[order]
-            assert (s[pos].man, s[pos].id, s[pos].rev) == (0x0E1C, code, rev), pos
-            assert s[pos].name == name, (pos, s[pos].name)
+        assert_esi_identities(s, esi)
         # CoE terminal: SDO information lists every object the ESI dictionary declares.
         ai = s[3]
         od_indices = {obj.index for obj in ai.od}
@@ -151,14 +170,9 @@ def test_signal_sources_and_a_modular_device_with_its_modules(ecat_segment, tmp_
     work.mkdir()
     shutil.copy(DATA / "rackcat-test-devices.xml", work)
     (work / "line.yaml").write_text(SOURCES_LINE)
-    q = shlex.quote
-    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --line {q(str(work / 'line.yaml'))} "
-           f"--no-control --no-pty --state-dir {q(str(tmp_path / 'state'))}")
-    iface, slave = ecat_segment(slaves=4, cmd=cmd, pcap=False)
-    master = pysoem.Master()
-    master.open(iface)
+    master, slave = open_line(ecat_segment, tmp_path,
+                              f"--line {shlex.quote(str(work / 'line.yaml'))}", 4)
     try:
-        assert master.config_init() == 4
         s = master.slaves
         # RC5002 (slot groups, ModuleClass): RM-DI4 in group 0, RM-DO4 in group 1 at
         # 0x7000 + 1 x 0x100 with its PDO 0x1600 + 1 x 0x20; its device-level lists follow.
@@ -210,35 +224,16 @@ def test_eni_builds_the_same_line(ecat_segment, tmp_path):
     shutil.copy(REPO / "examples/tiny-rack.yaml", esi_dir)
     eni = REPO / "tests/apps/data/test-line.eni.xml"
     q = shlex.quote
-    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --eni {q(str(eni))} "
-           f"--esi-dir {q(str(esi_dir))} --no-control --no-pty "
-           f"--state-dir {q(str(tmp_path / 'state'))}")
-    iface, slave = ecat_segment(slaves=5, cmd=cmd, pcap=False)
-    esi = esi_devices()
-    master = pysoem.Master()
-    master.open(iface)
+    master, slave = open_line(ecat_segment, tmp_path,
+                              f"--eni {q(str(eni))} --esi-dir {q(str(esi_dir))}", 5)
     try:
-        assert master.config_init() == 5
         s = master.slaves
-        for pos, order in enumerate(["RC1100", "RC1008", "RC2008", "RC3102"]):
-            code, rev, name, _ = esi[order]
-            assert (s[pos].man, s[pos].id, s[pos].rev) == (0x0E1C, code, rev), pos
-            assert s[pos].name == name, (pos, s[pos].name)
+        assert_esi_identities(s, esi_devices())
         assert (s[4].id, s[4].rev) == (0x00464E01, 0x00010009)
         master.config_map()
         sizes = [(len(x.output), len(x.input)) for x in s[:4]]
         assert sizes == [(0, 0), (0, 1), (1, 0), (0, 8)], sizes
-        master.state = pysoem.SAFEOP_STATE
-        master.write_state()
-        assert master.state_check(pysoem.SAFEOP_STATE, 3_000_000) == pysoem.SAFEOP_STATE
-        cycle(master)
-        master.state = pysoem.OP_STATE
-        master.write_state()
-        deadline = time.monotonic() + 10
-        while master.state_check(pysoem.OP_STATE, 1000) != pysoem.OP_STATE:
-            cycle(master)
-            assert time.monotonic() < deadline, \
-                [(x.name, hex(x.state), hex(x.al_status)) for x in s]
+        to_op(master)
         master.state = pysoem.INIT_STATE
         master.write_state()
     finally:
@@ -398,14 +393,9 @@ def test_foe_on_an_esi_device(ecat_segment, tmp_path):
     state = tmp_path / "state"
     secret = tmp_path / "secret.txt"
     secret.write_bytes(b"not for the master")
-    q = shlex.quote
-    cmd = (f"{q(str(BUILD / 'rackcat'))} run --iface {{iface}} --line {q(str(work / 'line.yaml'))} "
-           f"--no-control --no-pty --state-dir {q(str(state))}")
-    iface, slave = ecat_segment(slaves=2, cmd=cmd, pcap=False)
-    master = pysoem.Master()
-    master.open(iface)
+    master, slave = open_line(ecat_segment, tmp_path,
+                              f"--line {shlex.quote(str(work / 'line.yaml'))}", 2)
     try:
-        assert master.config_init() == 2
         # RC6001 has FoE and no CoE: its SII announces FoE only (word 0x1C bit 3).
         assert int.from_bytes(master.slaves[1].eeprom_read(0x1C)[:2], "little") == 0x0008
         for pos, dev in enumerate(master.slaves):

@@ -5,10 +5,10 @@ same modules, so the master's normal start-up (config_init, config_map, SAFEOP, 
 without hand edits.
 """
 import struct
-import time
 
-from rackcat_helpers import (go, open_master, pysoem, rackcat, run_command, run_cycles,
-                             store_parameters, to_op)
+from rackcat_helpers import (device_reset, go, open_master, pysoem, rackcat,
+                             ride_through_rim_loss, run_command, run_cycles, store_parameters,
+                             to_op)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -46,8 +46,7 @@ def test_scan_with_a_rim_offline_then_op_from_scratch(rackcat):
     master = open_master(rc.iface, 1)
     try:
         s = master.slaves[0]
-        s.add_emergency_callback(lambda e: None)  # the RIM loss sends 0xA001
-        s.sdo_write(0x2000, 0x0B, b"\x00")  # Detect Modules Override 0
+        ride_through_rim_loss(s)
         rc.cli("unplug", "--rim", 2)
         assert run_command(s, 0xF002, SCAN) == 200  # scan complete
         check_consistent(s, RIM1_MODULES)
@@ -62,18 +61,10 @@ def test_device_reset_with_a_rim_offline_then_op_from_scratch(rackcat):
     master = open_master(rc.iface, 1)
     try:
         s = master.slaves[0]
-        s.add_emergency_callback(lambda e: None)  # the RIM loss sends 0xA001
-        s.sdo_write(0x2000, 0x0B, b"\x00")
+        ride_through_rim_loss(s)
         assert store_parameters(s) == 0  # Override 0 survives the reset
         rc.cli("unplug", "--rim", 2)
-        s.sdo_write(0xFBF0, 1, b"teser\x00")
-        deadline = time.monotonic() + 3.0
-        while time.monotonic() < deadline:
-            master.read_state()
-            if s.state == pysoem.INIT_STATE:
-                break
-            time.sleep(0.01)
-        assert s.state == pysoem.INIT_STATE
+        device_reset(master, s)
         master.close()
         master = open_master(rc.iface, 1)
         s = master.slaves[0]

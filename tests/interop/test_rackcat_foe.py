@@ -16,7 +16,8 @@ import threading
 import time
 import zlib
 
-from rackcat_helpers import RACKCAT, open_master, pysoem, rackcat, run_command, store_parameters
+from rackcat_helpers import (RACKCAT, device_reset, open_master, pysoem, rackcat, run_command,
+                             store_parameters)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -142,14 +143,8 @@ def test_device_reset_after_a_firmware_update_runs_the_new_version(rackcat, tmp_
     assert sdo_text(s, 0x100A, 0) == "1.09.6"  # the old firmware runs until the reset
     assert sdo_u32(s, 0x1018, 3) == 0x00010009
     assert s.rev == 0x00010009  # SII words 0x0C-0x0D as SOEM's scan read them
-    s.sdo_write(0xFBF0, 1, b"teser\x00")
-    deadline = time.monotonic() + 3.0
-    while time.monotonic() < deadline:
-        master.read_state()
-        if s.state == pysoem.INIT_STATE:
-            break
-        time.sleep(0.01)
-    assert s.state == pysoem.INIT_STATE and s.al_status == 0, (hex(s.state), hex(s.al_status))
+    device_reset(master, s)
+    assert s.al_status == 0, hex(s.al_status)
     master.close()
     master = open_master(rc.iface)
     s = master.slaves[0]

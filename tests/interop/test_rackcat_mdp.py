@@ -3,10 +3,9 @@ wire: device and module information, module lists, and a stored parameter (0x200
 that survives a restart of `rackcat run` with the same --state-dir.
 """
 import struct
-import time
 
-from rackcat_helpers import (DEFAULT_MODULES, abort_code, go, open_master, pysoem, run_command,
-                             rackcat, run_cycles, store_parameters, to_op)
+from rackcat_helpers import (DEFAULT_MODULES, abort_code, device_reset, go, open_master, pysoem,
+                             run_command, rackcat, run_cycles, store_parameters, to_op)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -178,15 +177,8 @@ def test_device_reset_command_restarts_the_slave_in_init(rackcat):
     try:
         s = master.slaves[0]
         s.sdo_write(0x2000, 4, b"10.1.2.3")  # written, not stored
-        s.sdo_write(0xFBF0, 1, b"teser\x00")
-        deadline = time.monotonic() + 2.0
-        while time.monotonic() < deadline:
-            master.read_state()
-            if s.state == pysoem.INIT_STATE:
-                break
-            time.sleep(0.01)
-        assert s.state == pysoem.INIT_STATE  # no error flag, no AL status code
-        assert s.al_status == 0
+        device_reset(master, s)  # INIT: no error flag
+        assert s.al_status == 0  # no AL status code
         assert master.config_init() == 1
         assert master.state_check(pysoem.PREOP_STATE, 2_000_000) == pysoem.PREOP_STATE
         assert text(master.slaves[0], 0x2000, 4) == "192.168.9.50"

@@ -14,8 +14,8 @@ import struct
 import time
 
 from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, abort_code, cycle, get_bits, go,
-                             open_master, pysoem, rackcat, read_pdo_map, run_cycles, set_bits,
-                             to_op, wait_loopback)
+                             open_master, pysoem, rackcat, read_pdo_map, ride_through_rim_loss,
+                             run_cycles, set_bits, to_op, wait_loopback)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -127,9 +127,7 @@ def test_output_and_input_reactions_after_a_rim_unplug(rackcat):
     master = open_master(rc.iface, 1)
     try:
         s = master.slaves[0]
-        emergencies = []
-        s.add_emergency_callback(emergencies.append)  # the RIM loss sends 0xA001
-        s.sdo_write(0x2000, 0x0B, b"\x00")  # Detect Modules Override 0 (guide Table 23)
+        ride_through_rim_loss(s)
         set_output_reactions(s)
         # RIM 2's CDI-13: channel 0 substitute 1, 1 hold last, 2 zeros, 3..7 the guide (0).
         s.sdo_write(obj(RIM2_DI_MODULE, 0xA), 1, u16(SUBST))

@@ -35,6 +35,19 @@ def check(cond, text):
         raise AssertionError(text)
 
 
+def run_sdo_steps(rec, read, write, read_ca, exp):
+    """The SDO steps every SDO-capable driver runs in PREOP: expedited, normal and segmented
+    transfers and complete access, through the master's read(index, sub),
+    write(index, sub, data) and read_ca(index) (complete access of a whole object)."""
+    pre = ("preop",)
+    rec.run("sdo_upload_expedited", lambda: check_expedited_uploads(read, exp), pre)
+    rec.run("sdo_download_expedited", lambda: check_expedited_download(read, write, exp), pre)
+    rec.run("sdo_upload_normal", lambda: check_normal_upload(read, exp), pre)
+    rec.run("sdo_download_normal", lambda: check_normal_download(read, write, exp), pre)
+    rec.run("sdo_upload_segmented", lambda: check_segmented_upload(read_ca, exp), pre)
+    rec.run("complete_access", lambda: check_complete_access(read_ca, exp), pre)
+
+
 def check_sii_words(words_of, exp):
     """words_of(slave) -> the 64 words 0x00-0x3F as the master read them. Slave 0 compared
     whole; the others without the serial number (words 0x0E-0x0F)."""
@@ -46,6 +59,20 @@ def check_sii_words(words_of, exp):
         check(not bad, f"slave {i}: SII words differ at {[hex(k) for k in bad[:8]]}: "
                        f"{[hex(got[k]) for k in bad[:8]]} != {[hex(want[k]) for k in bad[:8]]}")
     return f"64 words x {exp['slaves']} slave(s)"
+
+
+def scan(config_init, n, call="config_init"):
+    """The scan step: config_init() up to 20 times, 0.1 s apart, until it finds the rack's n
+    slaves (a master may start before every slave of a fresh rackcat answers); fails naming
+    the master's call and what it found."""
+    found = 0
+    for _ in range(20):
+        found = config_init()
+        if found == n:
+            break
+        time.sleep(0.1)
+    check(found == n, f"{call} found {found} slaves, expected {n}")
+    return f"{found} slave(s)"
 
 
 def check_identity(idents, exp):

@@ -10,10 +10,8 @@ import time
 import numpy as np
 from pyecm.soem import SOEM
 
-from common import (LRW_WKC_PER_SLAVE, LoopbackRun, Recorder, check,
-                    check_complete_access, check_expedited_download, check_expedited_uploads,
-                    check_identity, check_normal_download, check_normal_upload,
-                    check_segmented_upload, check_sizes, parse_args, trigger, while_cycling)
+from common import (LRW_WKC_PER_SLAVE, LoopbackRun, Recorder, check, check_identity,
+                    check_sizes, parse_args, run_sdo_steps, scan, trigger, while_cycling)
 
 SDO_TIMEOUT_US = 700_000
 RECEIVE_TIMEOUT_US = 20_000
@@ -81,17 +79,7 @@ def scenario(m, rec, exp):
                enumerate(list(m.subdevices)[1:n + 1]) if s.state != state or s.ALstatuscode]
         check(reached == state and not bad, f"state 0x{state:X} not reached: {bad[:4]}")
 
-    def scan():
-        found = 0
-        for _ in range(20):
-            found = m.config_init()
-            if found == n:
-                break
-            time.sleep(0.1)
-        check(found == n, f"ecx_config_init found {found} slaves, expected {n}")
-        return f"{found} slave(s)"
-
-    if not rec.run("scan", scan):
+    if not rec.run("scan", lambda: scan(m.config_init, n, "ecx_config_init")):
         return
     rec.run("identity", lambda: check_identity(
         [(s.eep_man, s.eep_id, s.eep_rev) for s in list(m.subdevices)[1:n + 1]], exp))
@@ -114,12 +102,7 @@ def scenario(m, rec, exp):
         return read(index, 0, 1)
 
     pre = ("preop",)
-    rec.run("sdo_upload_expedited", lambda: check_expedited_uploads(read, exp), pre)
-    rec.run("sdo_download_expedited", lambda: check_expedited_download(read, write, exp), pre)
-    rec.run("sdo_upload_normal", lambda: check_normal_upload(read, exp), pre)
-    rec.run("sdo_download_normal", lambda: check_normal_download(read, write, exp), pre)
-    rec.run("sdo_upload_segmented", lambda: check_segmented_upload(read_ca, exp), pre)
-    rec.run("complete_access", lambda: check_complete_access(read_ca, exp), pre)
+    run_sdo_steps(rec, read, write, read_ca, exp)
 
     def aborts():
         codes = []

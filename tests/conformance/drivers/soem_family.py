@@ -3,11 +3,9 @@ every step is in SOEM's API. `Api` holds what differs between the bindings."""
 import struct
 import time
 
-from common import (LRW_WKC_PER_SLAVE, check, check_complete_access,
-                    check_descriptions, check_expedited_download, check_expedited_uploads,
-                    check_identity, check_normal_download, check_normal_upload, check_od_list,
-                    check_segmented_upload, check_sii_words, check_sizes, LoopbackRun,
-                    trigger, while_cycling)
+from common import (LRW_WKC_PER_SLAVE, check, check_descriptions, check_identity,
+                    check_od_list, check_sii_words, check_sizes, LoopbackRun, run_sdo_steps,
+                    scan, trigger, while_cycling)
 
 RECEIVE_TIMEOUT_US = 20_000
 
@@ -82,17 +80,7 @@ def scenario(m, rec, exp, api):
     pysoem = api.lib
     n = exp["slaves"]
 
-    def scan():
-        found = 0
-        for _ in range(20):
-            found = m.config_init()
-            if found == n:
-                break
-            time.sleep(0.1)
-        check(found == n, f"config_init found {found} slaves, expected {n}")
-        return f"{found} slave(s)"
-
-    if not rec.run("scan", scan):
+    if not rec.run("scan", lambda: scan(m.config_init, n)):
         return
     s0 = m.slaves[0]
     rec.run("identity", lambda: check_identity([(s.man, s.id, s.rev) for s in m.slaves], exp))
@@ -117,12 +105,7 @@ def scenario(m, rec, exp, api):
         return s0.sdo_read(index, 0, 1024, ca=True)
 
     pre = ("preop",)
-    rec.run("sdo_upload_expedited", lambda: check_expedited_uploads(read, exp), pre)
-    rec.run("sdo_download_expedited", lambda: check_expedited_download(read, write, exp), pre)
-    rec.run("sdo_upload_normal", lambda: check_normal_upload(read, exp), pre)
-    rec.run("sdo_download_normal", lambda: check_normal_download(read, write, exp), pre)
-    rec.run("sdo_upload_segmented", lambda: check_segmented_upload(read_ca, exp), pre)
-    rec.run("complete_access", lambda: check_complete_access(read_ca, exp), pre)
+    run_sdo_steps(rec, read, write, read_ca, exp)
 
     def aborts():
         codes = []
