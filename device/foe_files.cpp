@@ -162,6 +162,8 @@ FoeError FoeFiles::begin_write(std::string_view name, uint32_t password) {
   if (const FoeError e = check(name, password); e != FoeError::None) return e;
   write_name_.assign(name);
   incoming_.clear();
+  // Address space only (pages come as the file arrives): no reallocation while it does.
+  incoming_.reserve(kMaxFileBytes);
   writing_ = true;
   return FoeError::None;
 }
@@ -189,14 +191,20 @@ CommitProgress FoeFiles::poll_commit() {
 }
 
 void FoeFiles::abort_write() {
+  if (!writing_) return;  // a committed write's data waits for the worker: kept
   writing_ = false;
-  incoming_.clear();
+  incoming_ = {};
 }
 
 // --- worker thread ------------------------------------------------------------------------
 
 bool FoeFiles::run_one() {
-  job_.error = job_.kind == Kind::Read ? load(job_) : store(job_);
+  if (job_.kind == Kind::Read) {
+    job_.error = load(job_);
+  } else {
+    job_.error = store(job_);
+    job_.bytes = {};  // stored: the memory goes back
+  }
   busy_.store(false, std::memory_order_release);
   return false;
 }

@@ -98,7 +98,7 @@ FoeError FileAccess::write_data(std::span<const uint8_t> data) {
   received_ += data.size();
   if (target_ == Target::Firmware) {
     std::string error;
-    if (!store_.append(data, error)) return refuse(FoeError::FlashProblem, error);
+    if (!store_.append(data, error)) return refuse(FoeError::DiskFull, error);
     return FoeError::None;
   }
   if (target_ == Target::Parameters) {

@@ -1,6 +1,7 @@
 // Atomic, durable replacement of the installed firmware (firmware_store.hpp). POSIX: openat(2)
 // beneath a directory descriptor with O_NOFOLLOW, write(2), fsync(2), pread(2) back, renameat(2),
-// fsync(2) of the directory so the rename itself survives a power loss.
+// fsync(2) of the directory so the rename itself survives a power loss. All of it on the
+// background worker.
 #include "mdp/firmware_store.hpp"
 
 #include <fcntl.h>
@@ -10,7 +11,7 @@
 #include <cerrno>
 #include <cstring>
 
-#include "base/real_time.hpp"
+#include "base/fd_io.hpp"
 
 namespace rackcat::mdp {
 namespace {
@@ -22,20 +23,11 @@ std::string errno_text(const std::string& what) {
   return what + ": " + std::strerror(errno);
 }
 
-bool write_all(int fd, const uint8_t* p, size_t n) {
-  while (n > 0) {
-    const ssize_t w = ::write(fd, p, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) return false;
-    p += w;
-    n -= static_cast<size_t>(w);
-  }
-  return true;
-}
-
 }  // namespace
 
-FirmwareStore::FirmwareStore(std::shared_ptr<const StateDirectory> dir) : dir_(std::move(dir)) {
+FirmwareStore::FirmwareStore(std::shared_ptr<const StateDirectory> dir,
+                             base::BackgroundWorker& worker)
+    : dir_(std::move(dir)), worker_(worker) {
   if (!dir_->usable()) {
     error_ = dir_->problem();
     return;
@@ -46,8 +38,8 @@ FirmwareStore::FirmwareStore(std::shared_ptr<const StateDirectory> dir) : dir_(s
 }
 
 FirmwareStore::~FirmwareStore() {
-  wait();
-  close_tmp();
+  wait();  // a commit handed over is finished, not dropped
+  worker_.forget(*this);
 }
 
 std::string FirmwareStore::path() const {
@@ -67,56 +59,48 @@ std::optional<std::vector<uint8_t>> FirmwareStore::read_installed(size_t max_siz
   return bytes;
 }
 
-void FirmwareStore::close_tmp() {
-  if (tmp_fd_ >= 0) ::close(tmp_fd_);
-  tmp_fd_ = -1;
-}
-
 bool FirmwareStore::begin(std::string& error) {
-  wait();
-  close_tmp();
   if (!ok()) {
     error = error_;
     return false;
   }
-  // A leftover (or a link planted in its place) is removed, never followed; the new one is
-  // created afresh.
-  if (::unlinkat(dir_fd_, kTmp, 0) != 0 && errno != ENOENT) {
-    error = errno_text(std::string("cannot remove ") + kTmp);
+  if (busy_.load(std::memory_order_acquire)) {
+    error = "a firmware commit is still running";
     return false;
   }
-  tmp_fd_ = ::openat(dir_fd_, kTmp, O_RDWR | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
-  if (tmp_fd_ < 0) {
-    error = errno_text(std::string("cannot create ") + kTmp);
-    return false;
-  }
+  incoming_.clear();
+  // Address space only (pages come as the file arrives): no reallocation while it does.
+  incoming_.reserve(kMaxBytes);
+  open_ = true;
   return true;
 }
 
 bool FirmwareStore::append(std::span<const uint8_t> data, std::string& error) {
-  if (tmp_fd_ < 0 || !write_all(tmp_fd_, data.data(), data.size())) {
-    error = errno_text(std::string("cannot write ") + kTmp);
+  if (!open_) {
+    error = "no firmware write was begun";
     return false;
   }
+  if (incoming_.size() + data.size() > kMaxBytes) {
+    error = "firmware file larger than " + std::to_string(kMaxBytes) + " bytes";
+    return false;
+  }
+  incoming_.insert(incoming_.end(), data.begin(), data.end());
   return true;
 }
 
 void FirmwareStore::abort() {
-  if (busy_.load()) return;
-  if (tmp_fd_ >= 0) {
-    close_tmp();
-    ::unlinkat(dir_fd_, kTmp, 0);
-  }
-}
-
-void FirmwareStore::wait() {
-  if (worker_.joinable()) worker_.join();
+  open_ = false;
+  incoming_ = {};
 }
 
 void FirmwareStore::start_commit(Verifier verify) {
-  wait();
-  busy_.store(true);
-  worker_ = std::thread([this, v = std::move(verify)] { commit(v); });
+  if (busy_.load(std::memory_order_acquire)) return;  // begin() refused meanwhile: not reached
+  file_.swap(incoming_);
+  incoming_ = {};
+  verify_ = std::move(verify);
+  open_ = false;
+  busy_.store(true, std::memory_order_release);
+  worker_.schedule(*this);
 }
 
 FirmwareStore::Status FirmwareStore::poll_commit() const {
@@ -124,33 +108,62 @@ FirmwareStore::Status FirmwareStore::poll_commit() const {
   return {false, result_, result_detail_};
 }
 
-void FirmwareStore::commit(const Verifier& verify) {
-  (void)base::leave_real_time();  // a helper thread, not the device thread
-  auto finish = [this](foe::FoeError e, std::string detail) {
-    if (e != foe::FoeError::None) {
-      close_tmp();
-      ::unlinkat(dir_fd_, kTmp, 0);
-    }
-    result_ = e;
-    result_detail_ = std::move(detail);
+void FirmwareStore::wait() {
+  std::unique_lock lock(done_mutex_);
+  done_.wait(lock, [this] { return !busy_.load(std::memory_order_acquire); });
+}
+
+bool FirmwareStore::run_one() {
+  std::string detail;
+  const foe::FoeError e = commit(detail);
+  if (e != foe::FoeError::None) ::unlinkat(dir_fd_, kTmp, 0);
+  file_ = {};
+  result_ = e;
+  result_detail_ = std::move(detail);
+  {
+    std::lock_guard lock(done_mutex_);
     busy_.store(false, std::memory_order_release);
-  };
-  if (::fsync(tmp_fd_) != 0) return finish(foe::FoeError::FlashProblem, errno_text("fsync"));
-  close_tmp();
+  }
+  done_.notify_all();
+  return false;
+}
+
+foe::FoeError FirmwareStore::commit(std::string& detail) {
+  // A leftover (or a link planted in its place) is removed, never followed; the new one is
+  // created afresh.
+  if (::unlinkat(dir_fd_, kTmp, 0) != 0 && errno != ENOENT) {
+    detail = errno_text(std::string("cannot remove ") + kTmp);
+    return foe::FoeError::FlashProblem;
+  }
+  const int fd =
+      ::openat(dir_fd_, kTmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    detail = errno_text(std::string("cannot create ") + kTmp);
+    return foe::FoeError::FlashProblem;
+  }
+  const bool written = base::write_all(fd, file_.data(), file_.size());
+  if (!written || ::fsync(fd) != 0) {
+    detail = errno_text(std::string(written ? "cannot fsync " : "cannot write ") + kTmp);
+    ::close(fd);
+    return foe::FoeError::FlashProblem;
+  }
+  ::close(fd);
   // Verify what is on disk, not what was meant to be written.
   std::vector<uint8_t> bytes;
-  std::string detail;
   if (dir_->read(kTmp, kMaxBytes, bytes, detail) != StateDirectory::ReadResult::Ok) {
-    return finish(foe::FoeError::FlashProblem, detail);
+    return foe::FoeError::FlashProblem;
   }
-  if (const foe::FoeError e = verify(bytes, detail); e != foe::FoeError::None) {
-    return finish(e, detail);
-  }
+  if (const foe::FoeError e = verify_(bytes, detail); e != foe::FoeError::None) return e;
   if (::renameat(dir_fd_, kTmp, dir_fd_, kFile) != 0) {
-    return finish(foe::FoeError::FlashProblem, errno_text("cannot rename onto firmware.rfw"));
+    detail = errno_text("cannot rename onto firmware.rfw");
+    return foe::FoeError::FlashProblem;
   }
-  if (::fsync(dir_fd_) != 0) return finish(foe::FoeError::FlashProblem, errno_text("fsync dir"));
-  finish(foe::FoeError::None, "installed " + path());
+  if (::fsync(dir_fd_) != 0) {
+    detail = errno_text("fsync dir");
+    return foe::FoeError::FlashProblem;
+  }
+  detail = "installed " + path();
+  return foe::FoeError::None;
 }
 
 }  // namespace rackcat::mdp

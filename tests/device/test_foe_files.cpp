@@ -11,7 +11,6 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
-#include <future>
 #include <iterator>
 #include <string>
 #include <thread>
@@ -19,6 +18,7 @@
 
 #include "base/background_worker.hpp"
 #include "device/foe_files.hpp"
+#include "tests/support/worker_gate.hpp"
 
 namespace rackcat::device {
 namespace {
@@ -31,24 +31,7 @@ using Bytes = std::vector<uint8_t>;
 
 constexpr uint32_t kPassword = 0x52434657;
 
-// Holds the worker until opened: a job scheduled meanwhile cannot have run.
-class Gate final : public base::BackgroundWorker::Client {
- public:
-  explicit Gate(base::BackgroundWorker& worker) {
-    worker.schedule(*this);
-    entered_.get_future().wait();
-  }
-  void open() { open_.set_value(); }
-
- private:
-  bool run_one() override {
-    entered_.set_value();
-    open_.get_future().wait();
-    return false;
-  }
-  std::promise<void> entered_;
-  std::promise<void> open_;
-};
+using Gate = rackcat::testing::WorkerGate;
 
 std::string text_of(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

@@ -14,6 +14,7 @@
 #include "mdp/file_access.hpp"
 #include "mdp/firmware_image.hpp"
 #include "mdp/firmware_store.hpp"
+#include "tests/support/worker_gate.hpp"
 
 namespace rackcat::mdp {
 namespace {
@@ -150,6 +151,31 @@ TEST_F(FirmwareStoreTest, CommitInstallsTheVerifiedFileAndLeavesNoTemporary) {
   EXPECT_FALSE(std::filesystem::exists(dir / "firmware.rfw.tmp"));
   EXPECT_EQ(std::filesystem::status(dir).permissions() & std::filesystem::perms::all,
             std::filesystem::perms::owner_all);
+}
+
+// The device thread only hands the bytes over: while the worker is held, the commit is busy and
+// nothing (not even the temporary file) is in the state directory; the worker writes,
+// verifies and installs it.
+TEST_F(FirmwareStoreTest, CommitRunsOnTheWorkerNotOnTheDeviceThread) {
+  base::BackgroundWorker worker;
+  FirmwareStore s(StateDirectory::open(dir.string()), worker);
+  const Bytes f = pack_abc();
+  std::string error;
+  {
+    rackcat::testing::WorkerGate gate(worker);
+    ASSERT_TRUE(s.begin(error)) << error;
+    ASSERT_TRUE(s.append(f, error)) << error;
+    s.start_commit(verifier());
+    EXPECT_TRUE(s.poll_commit().busy);
+    EXPECT_FALSE(s.begin(error));  // one write at a time
+    EXPECT_FALSE(std::filesystem::exists(dir / "firmware.rfw.tmp"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "firmware.rfw"));
+    gate.open();
+  }
+  s.wait();
+  EXPECT_EQ(s.poll_commit().error, FoeError::None) << s.poll_commit().detail;
+  std::string d;
+  EXPECT_EQ(s.read_installed(1 << 20, d).value_or(Bytes{}), f);
 }
 
 TEST_F(FirmwareStoreTest, RefusedFileLeavesTheInstalledOneUnchanged) {
