@@ -13,6 +13,7 @@
 #include <pugixml.hpp>
 #include <set>
 
+#include "base/fd_io.hpp"
 #include "base/little_endian.hpp"
 #include "coe/access.hpp"
 #include "coe/data_type.hpp"
@@ -1386,19 +1387,17 @@ EsiDevice load_esi_device(const std::string& file, const DeviceSelector& selecto
     ::close(fd);
     throw FileError(file, 0, "not a regular file");
   }
-  std::string text;
-  char buf[65536];
-  for (;;) {
-    const ssize_t n = ::read(fd, buf, sizeof buf);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    text.append(buf, static_cast<size_t>(n));
-    if (text.size() > (64u << 20)) {
-      ::close(fd);
-      throw FileError(file, 0, "larger than 64 MiB");
-    }
+  constexpr size_t kMaxBytes = 64u << 20;
+  if (static_cast<uint64_t>(st.st_size) > kMaxBytes) {
+    ::close(fd);
+    throw FileError(file, 0, "larger than 64 MiB");
   }
+  std::string text(static_cast<size_t>(st.st_size), '\0');
+  const ssize_t n = base::read_fully(fd, text.data(), text.size());
+  const int err = errno;
   ::close(fd);
+  if (n < 0) throw FileError(file, 0, std::string("cannot read: ") + std::strerror(err));
+  text.resize(static_cast<size_t>(n));
   return parse_esi_device(text, file, selector);
 }
 

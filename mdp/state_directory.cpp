@@ -10,6 +10,8 @@
 #include <cerrno>
 #include <cstring>
 
+#include "base/fd_io.hpp"
+
 namespace rackcat::mdp {
 namespace {
 
@@ -35,17 +37,6 @@ bool make_dirs(const std::string& dir, std::string& error) {
 bool single_component(const std::string& name) {
   return !name.empty() && name != "." && name != ".." && name.find('/') == std::string::npos &&
          name.find('\0') == std::string::npos;
-}
-
-bool write_all(int fd, const uint8_t* data, size_t len) {
-  while (len > 0) {
-    const ssize_t n = ::write(fd, data, len);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    data += n;
-    len -= static_cast<size_t>(n);
-  }
-  return true;
 }
 
 const char* kind_of(mode_t mode) {
@@ -140,19 +131,12 @@ StateDirectory::ReadResult StateDirectory::read(const std::string& name, size_t 
   } else {
     // One byte more than the cap: a file that grew since fstat is refused too.
     out.resize(max_bytes + 1);
-    size_t got = 0;
-    while (got < out.size()) {
-      const ssize_t n = ::read(fd, out.data() + got, out.size() - got);
-      if (n < 0 && errno == EINTR) continue;
-      if (n < 0) {
-        why = "cannot read " + path + ": " + reason(errno);
-        result = ReadResult::Refused;
-        break;
-      }
-      if (n == 0) break;
-      got += static_cast<size_t>(n);
-    }
-    if (result == ReadResult::Ok && got > max_bytes) {
+    const ssize_t n = base::read_fully(fd, out.data(), out.size());
+    const size_t got = n < 0 ? 0 : static_cast<size_t>(n);
+    if (n < 0) {
+      why = "cannot read " + path + ": " + reason(errno);
+      result = ReadResult::Refused;
+    } else if (got > max_bytes) {
       why = path + " grew beyond " + std::to_string(max_bytes) + " bytes";
       result = ReadResult::Refused;
     }
@@ -192,7 +176,7 @@ bool StateDirectory::replace(const std::string& name, std::span<const uint8_t> b
     ::unlinkat(fd_, tmp.c_str(), 0);
     return false;
   };
-  if (!write_all(fd, bytes.data(), bytes.size())) return fail("cannot write");
+  if (!base::write_all(fd, bytes.data(), bytes.size())) return fail("cannot write");
   if (::fchmod(fd, mode) != 0) return fail("cannot chmod");  // umask may have narrowed it
   if (::fsync(fd) != 0) return fail("cannot fsync");
   ::close(fd);
