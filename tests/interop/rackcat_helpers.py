@@ -243,6 +243,20 @@ def rackcat(tmp_path):
 # --- the master ------------------------------------------------------------------------
 
 
+@contextlib.contextmanager
+def rack_with_master(rackcat):
+    """A fresh `rackcat run` of the default rack (the rackcat fixture) and a pysoem master that
+    has scanned it (PREOP): yields (rc, master); the master is closed afterwards and rackcat
+    stopped when the block succeeded."""
+    rc = rackcat()
+    master = open_master(rc.iface, 1)
+    try:
+        yield rc, master
+    finally:
+        master.close()
+    rc.stop()
+
+
 def open_master(iface, expected_slaves=1):
     master = pysoem.Master()
     master.open(iface)

@@ -6,7 +6,7 @@ without hand edits.
 """
 import struct
 
-from rackcat_helpers import (device_reset, go, open_master, pysoem, rackcat,
+from rackcat_helpers import (device_reset, go, open_master, pysoem, rack_with_master, rackcat,
                              ride_through_rim_loss, run_command, run_cycles, store_parameters,
                              to_op)
 
@@ -42,18 +42,13 @@ def reach_op(master):
 
 
 def test_scan_with_a_rim_offline_then_op_from_scratch(rackcat):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         ride_through_rim_loss(s)
         rc.cli("unplug", "--rim", 2)
         assert run_command(s, 0xF002, SCAN) == 200  # scan complete
         check_consistent(s, RIM1_MODULES)
         reach_op(master)
-    finally:
-        master.close()
-    rc.stop()
 
 
 def test_device_reset_with_a_rim_offline_then_op_from_scratch(rackcat):

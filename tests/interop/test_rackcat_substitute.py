@@ -14,8 +14,8 @@ import struct
 import time
 
 from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, abort_code, cycle, get_bits, go,
-                             open_master, pysoem, rackcat, read_pdo_map, ride_through_rim_loss,
-                             run_cycles, set_bits, to_op, wait_loopback)
+                             pysoem, rack_with_master, rackcat, read_pdo_map,
+                             ride_through_rim_loss, run_cycles, set_bits, to_op, wait_loopback)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -98,9 +98,7 @@ def ack_error_and_init(master, state):
 
 
 def test_output_reactions_after_the_sm_watchdog(rackcat):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         # A reaction outside the profile's table is refused and changes nothing.
         assert abort_code(s.sdo_write, obj(DO_MODULE, 0x8), 8, u16(0x0006)) == 0x06090030
@@ -117,15 +115,10 @@ def test_output_reactions_after_the_sm_watchdog(rackcat):
         assert s.al_status == 0x001B, hex(s.al_status)
         check_substituted(master, di, ai)
         ack_error_and_init(master, pysoem.SAFEOP_STATE)
-    finally:
-        master.close()
-    rc.stop()
 
 
 def test_output_and_input_reactions_after_a_rim_unplug(rackcat):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         ride_through_rim_loss(s)
         set_output_reactions(s)
@@ -182,6 +175,4 @@ def test_output_and_input_reactions_after_a_rim_unplug(rackcat):
         assert struct.unpack("<H", s.sdo_read(obj(RIM2_DI_MODULE, 0xC), 0))[0] == 0
         assert get_bits(s.input, status_pdo) == 0
         ack_error_and_init(master, pysoem.SAFEOP_STATE)
-    finally:
-        master.close()
-    rc.stop()
+
