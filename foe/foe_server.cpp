@@ -81,7 +81,10 @@ size_t FoeServer::poll(std::span<uint8_t> reply) {
 void FoeServer::reset() {
   // A running commit is not waited for (that would hold the device thread): it completes on
   // its own, and a request meanwhile finds it busy (write_request, read_request).
-  if (phase_ == Phase::Committing) return;
+  if (phase_ == Phase::Committing) {
+    if (!backend_.poll_commit().busy) phase_ = Phase::Idle;
+    return;
+  }
   end_transfer();
 }
 

@@ -151,6 +151,23 @@ TEST_F(FoeServerTest, NewRequestDuringABusyCommitIsAccessDenied) {
   EXPECT_EQ(send(kWrqFileA, 64), cat({0x05, 0x00, 0x02, 0x80, 0x00, 0x00}, "Access denied"));
 }
 
+// The mailbox restarts (INIT) while a commit runs: not waited for; a new request meanwhile is
+// Access denied, and once the commit is done the server is idle again.
+TEST_F(FoeServerTest, ResetDuringACommitDoesNotWaitForIt) {
+  backend.busy_polls = 4;  // each poll_commit below takes one
+  ASSERT_EQ(send(kWrqFileA), kAck0);
+  ASSERT_EQ(send(cat({0x03, 0x00, 0x01, 0x00, 0x00, 0x00}, "x"))[0], 0x06);  // Busy
+  server.reset();  // still busy: returns at once
+  EXPECT_TRUE(server.committing());
+  EXPECT_EQ(send(kWrqFileA, 64), cat({0x05, 0x00, 0x02, 0x80, 0x00, 0x00}, "Access denied"));
+  server.reset();  // the last busy poll
+  EXPECT_TRUE(server.committing());
+  server.reset();  // done now: idle
+  EXPECT_TRUE(server.idle());
+  EXPECT_EQ(backend.files["fileA"], cat({}, "x"));
+  EXPECT_EQ(send(kWrqFileA), kAck0);
+}
+
 TEST_F(FoeServerTest, RefusedCommitAnswersTheBackendsError) {
   backend.commit_error = FoeError::WrongChecksum;
   ASSERT_EQ(send(kWrqFileA), kAck0);
