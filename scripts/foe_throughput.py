@@ -10,11 +10,18 @@ and counts the frames the master sent during the transfer: frames per FoE data p
 the read of the Ack).
 
     sudo scripts/foe_throughput.py [--build-dir build] [--size 1048576] [--sizes 512,1486]
+
+With --esi: the same for a device emulated from its ESI (test device RC6001 of
+tests/device/data/rackcat-test-devices.xml on a line, BOOT, its 256-byte bootstrap mailbox):
+foe_write of a --size file (at most 1 MiB, device/foe_files.hpp) and foe_read of it back; the
+device's file work runs on the background worker (the write's commit answers Busy, the read's
+first Data is deferred until the file is read).
 """
 import argparse
 import os
 import random
 import shlex
+import shutil
 import struct
 import subprocess
 import sys
@@ -32,6 +39,7 @@ def main():
     ap.add_argument("--size", type=int, default=1 << 20)
     ap.add_argument("--sizes", default="512,1486")
     ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--esi", action="store_true", help="an ESI device's FoE files (RC6001)")
     args = ap.parse_args()
     os.environ["RACKCAT_BUILD_DIR"] = args.build_dir
     import pysoem
@@ -117,10 +125,81 @@ def main():
                 n += 1
         return None, busy
 
+    if args.esi:
+        with realtime_master():
+            measure_esi(args, rackcat, tmp, pysoem, VethNamespace, SlaveProcess,
+                        frames_of_transfer)
+        return
     print(f"FoE write of {len(data)} bytes (pysoem {pysoem.__version__}, BOOT; slave and master "
           "SCHED_FIFO as in tests/interop)")
     with realtime_master():
         measure(args, data, one, frames_of_transfer)
+
+
+def measure_esi(args, rackcat, tmp, pysoem, VethNamespace, SlaveProcess, frames_of_transfer):
+    """--esi: RC6001 (FoE, bootstrap mailbox 256 B) on a line; foe_write then foe_read."""
+    from rackcat_helpers import rt_prefix
+    shutil.copy(REPO / "tests/device/data/rackcat-test-devices.xml", tmp)
+    line = tmp / "line.yaml"
+    line.write_text("devices:\n  - {esi: rackcat-test-devices.xml, device: RC6001}\n")
+    data = random.Random(6).randbytes(args.size)
+    password = 0x52434657
+
+    def one(pcap):
+        with VethNamespace() as ns:
+            state = tempfile.mkdtemp(dir=tmp)
+            cap = tmp / f"foe-esi-{time.monotonic_ns()}.pcap" if pcap else None
+            proc = SlaveProcess(ns, f"{shlex.quote(str(rackcat))} run --iface {{iface}}", 1,
+                                ["--line", str(line), "--state-dir", state, "--no-control",
+                                 "--no-pty"], cap, tmp / f"log-esi-{time.monotonic_ns()}.txt",
+                                rt_prefix())
+            try:
+                proc.wait_ready(1)
+                m = pysoem.Master()
+                m.open(ns.master_iface)
+                assert m.config_init() == 1
+                s = m.slaves[0]
+                s.state = pysoem.INIT_STATE
+                s.write_state()
+                assert s.state_check(pysoem.INIT_STATE, 3_000_000) == pysoem.INIT_STATE
+                rx = struct.unpack("<HH", s.eeprom_read(pysoem.SiiOffset.BOOT_RX_MBX))
+                tx = struct.unpack("<HH", s.eeprom_read(pysoem.SiiOffset.BOOT_TX_MBX))
+                s.amend_mbx(mailbox="out", start_address=rx[0], size=rx[1])
+                s.amend_mbx(mailbox="in", start_address=tx[0], size=tx[1])
+                s.state = pysoem.BOOT_STATE
+                s.write_state()
+                assert s.state_check(pysoem.BOOT_STATE, 3_000_000) == pysoem.BOOT_STATE
+                t0 = time.time()
+                assert s.foe_write("bench.bin", password, data, 10_000_000) > 0, proc.log()
+                t1 = time.time()
+                back = s.foe_read("bench.bin", password, len(data), 10_000_000)
+                t2 = time.time()
+                assert back == data, "foe_read gave other bytes"
+                s.state = pysoem.INIT_STATE
+                s.write_state()
+                m.close()
+            finally:
+                proc.stop()
+            return rx[1], t1 - t0, t2 - t1, cap
+
+    writes, reads = [], []
+    for _ in range(args.runs):
+        mbx, w, r, _ = one(False)
+        writes.append(len(data) / 1024 / w)
+        reads.append(len(data) / 1024 / r)
+    mbx, _, _, cap = one(True)
+    packets = len(data) // (mbx - 12) + 1
+    frames, busy = frames_of_transfer(cap, packets)
+    writes.sort()
+    reads.sort()
+    print(f"FoE of {len(data)} bytes to/from an ESI device (RC6001, pysoem {pysoem.__version__}, "
+          f"BOOT, mailbox {mbx} B: {mbx - 12} data bytes/packet, {packets} packets)")
+    print(f"write: median {writes[len(writes) // 2]:.0f} KiB/s (runs: "
+          f"{', '.join(f'{r:.0f}' for r in writes)}), "
+          + (f"{frames / (packets - 1):.2f} master frames per data packet, " if frames else "")
+          + f"{busy} Busy answers while committing")
+    print(f"read:  median {reads[len(reads) // 2]:.0f} KiB/s (runs: "
+          f"{', '.join(f'{r:.0f}' for r in reads)})")
 
 
 def measure(args, data, one, frames_of_transfer):
