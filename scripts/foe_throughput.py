@@ -65,22 +65,8 @@ def main():
                                  "--boot-mailbox-size", str(mbx)], cap, tmp / f"log-{mbx}-{time.monotonic_ns()}.txt",
                                 rt_prefix())
             try:
-                proc.wait_ready(1)
-                m = pysoem.Master()
-                m.open(ns.master_iface)
-                assert m.config_init() == 1
-                s = m.slaves[0]
-                s.state = pysoem.INIT_STATE
-                s.write_state()
-                assert s.state_check(pysoem.INIT_STATE, 3_000_000) == pysoem.INIT_STATE
-                rx = struct.unpack("<HH", s.eeprom_read(pysoem.SiiOffset.BOOT_RX_MBX))
-                tx = struct.unpack("<HH", s.eeprom_read(pysoem.SiiOffset.BOOT_TX_MBX))
-                assert rx[1] == mbx
-                s.amend_mbx(mailbox="out", start_address=rx[0], size=rx[1])
-                s.amend_mbx(mailbox="in", start_address=tx[0], size=tx[1])
-                s.state = pysoem.BOOT_STATE
-                s.write_state()
-                assert s.state_check(pysoem.BOOT_STATE, 3_000_000) == pysoem.BOOT_STATE
+                m, s, size = open_in_boot(pysoem, proc, ns)
+                assert size == mbx
                 t0 = time.time()
                 wkc = s.foe_write("rackcat-bench.rfw", password, data, 10_000_000)
                 t1 = time.time()
@@ -154,21 +140,7 @@ def measure_esi(args, rackcat, tmp, pysoem, VethNamespace, SlaveProcess, frames_
                                  "--no-pty"], cap, tmp / f"log-esi-{time.monotonic_ns()}.txt",
                                 rt_prefix())
             try:
-                proc.wait_ready(1)
-                m = pysoem.Master()
-                m.open(ns.master_iface)
-                assert m.config_init() == 1
-                s = m.slaves[0]
-                s.state = pysoem.INIT_STATE
-                s.write_state()
-                assert s.state_check(pysoem.INIT_STATE, 3_000_000) == pysoem.INIT_STATE
-                rx = struct.unpack("<HH", s.eeprom_read(pysoem.SiiOffset.BOOT_RX_MBX))
-                tx = struct.unpack("<HH", s.eeprom_read(pysoem.SiiOffset.BOOT_TX_MBX))
-                s.amend_mbx(mailbox="out", start_address=rx[0], size=rx[1])
-                s.amend_mbx(mailbox="in", start_address=tx[0], size=tx[1])
-                s.state = pysoem.BOOT_STATE
-                s.write_state()
-                assert s.state_check(pysoem.BOOT_STATE, 3_000_000) == pysoem.BOOT_STATE
+                m, s, size = open_in_boot(pysoem, proc, ns)
                 t0 = time.time()
                 assert s.foe_write("bench.bin", password, data, 10_000_000) > 0, proc.log()
                 t1 = time.time()
@@ -180,7 +152,7 @@ def measure_esi(args, rackcat, tmp, pysoem, VethNamespace, SlaveProcess, frames_
                 m.close()
             finally:
                 proc.stop()
-            return rx[1], t1 - t0, t2 - t1, cap
+            return size, t1 - t0, t2 - t1, cap
 
     writes, reads = [], []
     for _ in range(args.runs):
@@ -200,6 +172,28 @@ def measure_esi(args, rackcat, tmp, pysoem, VethNamespace, SlaveProcess, frames_
           + f"{busy} Busy answers while committing")
     print(f"read:  median {reads[len(reads) // 2]:.0f} KiB/s (runs: "
           f"{', '.join(f'{r:.0f}' for r in reads)})")
+
+
+def open_in_boot(pysoem, proc, ns):
+    """The one slave of `proc`, scanned by pysoem and taken to BOOT as SOEM's firm_update does
+    (INIT, SII bootstrap mailbox words 0x14-0x17 into SM0/SM1, BOOT). Returns (master, slave,
+    bootstrap mailbox size)."""
+    proc.wait_ready(1)
+    m = pysoem.Master()
+    m.open(ns.master_iface)
+    assert m.config_init() == 1
+    s = m.slaves[0]
+    s.state = pysoem.INIT_STATE
+    s.write_state()
+    assert s.state_check(pysoem.INIT_STATE, 3_000_000) == pysoem.INIT_STATE
+    rx = struct.unpack("<HH", s.eeprom_read(pysoem.SiiOffset.BOOT_RX_MBX))
+    tx = struct.unpack("<HH", s.eeprom_read(pysoem.SiiOffset.BOOT_TX_MBX))
+    s.amend_mbx(mailbox="out", start_address=rx[0], size=rx[1])
+    s.amend_mbx(mailbox="in", start_address=tx[0], size=tx[1])
+    s.state = pysoem.BOOT_STATE
+    s.write_state()
+    assert s.state_check(pysoem.BOOT_STATE, 3_000_000) == pysoem.BOOT_STATE
+    return m, s, rx[1]
 
 
 def measure(args, data, one, frames_of_transfer):
