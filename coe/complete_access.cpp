@@ -3,6 +3,7 @@
 #include "coe/complete_access.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 
 #include "coe/bits.hpp"
@@ -88,10 +89,13 @@ AbortCode SdoServer::write_complete(Object& obj, uint8_t subindex, std::span<con
     return AbortCode::UnsupportedAccess;
   }
   const auto image = obj.image();
-  // The candidate image lives in a buffer sized at start-up (prepare()).
-  if (image.size() > scratch_.size()) {
+  // The candidate image lives on the stack, or for objects larger than that in a buffer
+  // reserved at start-up (prepare()).
+  if (image.size() > capacity_) {
     return AbortCode::OutOfMemory;
   }
+  std::array<uint8_t, kStackScratch> local_cand;  // written before it is read
+  std::array<uint8_t, kStackScratch> local_value;
   const uint8_t max_sub = obj.max_subindex();
   uint8_t last = ca_last_subindex(obj);
   if (subindex == 0) {
@@ -113,7 +117,7 @@ AbortCode SdoServer::write_complete(Object& obj, uint8_t subindex, std::span<con
   }
 
   const size_t begin = ca_begin_bit(subindex);
-  uint8_t* cand = scratch_.data();
+  uint8_t* cand = image.size() <= local_cand.size() ? local_cand.data() : scratch_.data();
   std::memcpy(cand, image.data(), image.size());
   for (const Entry& e : obj.entries()) {
     if (e.subindex < subindex || e.padding) {
@@ -132,7 +136,8 @@ AbortCode SdoServer::write_complete(Object& obj, uint8_t subindex, std::span<con
     if (AbortCode rc = check_write_access(e.access, state); rc != AbortCode::None) {
       return rc;
     }
-    uint8_t* value = value_.data();
+    uint8_t* value =
+        e.byte_length() <= local_value.size() ? local_value.data() : value_.data();
     std::memset(value, 0, e.byte_length());
     copy_bits(value, 0, cand, e.bit_offset, bits);
     if (AbortCode rc = check_value(od_, obj, e, {value, e.byte_length()}, {cand, image.size()});

@@ -2,6 +2,7 @@
 // (ETG.1000.6 §5.6.2.1 - §5.6.2.3). Every write is checked (access per ESM state, length,
 // value range, the object's validate_write hook) before one byte of the image changes.
 #include <algorithm>
+#include <array>
 #include <cstring>
 
 #include "coe/bits.hpp"
@@ -67,10 +68,11 @@ AbortCode SdoServer::write_entry(Object& obj, const Entry& e, std::span<const ui
   if (data.size() < len && e.type() != DataType::VisibleString) {
     return AbortCode::LengthTooLow;
   }
-  if (len > scratch_.size()) {
+  if (len > capacity_) {
     return AbortCode::OutOfMemory;  // buffers sized by prepare()
   }
-  uint8_t* value = scratch_.data();
+  std::array<uint8_t, kStackScratch> local;  // written before it is read
+  uint8_t* value = len <= local.size() ? local.data() : scratch_.data();
   std::memmove(value, data.data(), data.size());
   std::memset(value + data.size(), 0, len - data.size());
   const std::span<const uint8_t> v(value, len);

@@ -23,11 +23,20 @@ SdoServer::SdoServer(ObjectDictionary& od) : od_(od) {
 
 void SdoServer::prepare() {
   const size_t n = std::max(od_.max_image_bytes(), kMinTransferBuffer);
-  data_.assign(n, 0);
-  scratch_.assign(n, 0);
-  value_.assign(n, 0);
+  capacity_ = n;
   // An entry description holds three values of the entry (default, min, max) plus name.
-  info_buf_.assign(3 * n + 512, 0);
+  const size_t info = 3 * n + 512;
+  const size_t big = n > kStackScratch ? n : 0;
+  data_ = {};
+  info_buf_ = {};
+  scratch_ = {};
+  value_ = {};
+  buffers_ = LazyBuffer(n + info + 2 * big);
+  const std::span<uint8_t> all = buffers_.span();
+  data_ = all.first(n);
+  info_buf_ = all.subspan(n, info);
+  scratch_ = all.subspan(n + info, big);
+  value_ = all.subspan(n + info + big, big);
 }
 
 void SdoServer::reset() {

@@ -11,7 +11,11 @@
 // MailboxServer sends; the counter, double writes and the repeat request are the server's.
 //
 // One server per slave; its transfer state is per server, so several slaves run side by side.
-// Construction sizes every buffer; handle() and poll() allocate nothing.
+// Construction sizes every buffer; handle() and poll() allocate nothing. The buffers that live
+// from one request to the next (segmented transfer data, the SDO Information description being
+// fragmented) are reserved in a LazyBuffer and take RAM only once a transfer writes them; the
+// ones a single request needs (a candidate value or image before it is committed) are on the
+// serving thread's stack (issue 16: per-slave memory proportional to what the slave uses).
 #pragma once
 
 #include <array>
@@ -24,6 +28,7 @@
 #include "coe/abort_code.hpp"
 #include "coe/access.hpp"
 #include "coe/emergency_queue.hpp"
+#include "coe/lazy_buffer.hpp"
 #include "coe/object_dictionary.hpp"
 
 namespace rackcat::coe {
@@ -62,6 +67,9 @@ class SdoServer {
   void reset();
   // Re-sizes the transfer buffers after objects were added (start-up only: allocates).
   void prepare();
+  // Bytes a single request may hold on the serving thread's stack (a candidate value or
+  // image); dictionaries with larger objects get reserved buffers for them instead.
+  static constexpr size_t kStackScratch = 4096;
 
   const ObjectDictionary& dictionary() const { return od_; }
 
@@ -139,10 +147,14 @@ class SdoServer {
   ObjectDictionary& od_;
   Transfer transfer_;
   InfoTransfer info_;
-  std::vector<uint8_t> data_;      // segmented transfer data (upload snapshot, download bytes)
-  std::vector<uint8_t> scratch_;   // candidate image / padded entry value before commit
-  std::vector<uint8_t> value_;     // one entry's value during a complete-access write check
-  std::vector<uint8_t> info_buf_;  // object / entry description being fragmented
+  // The largest value a transfer can move: the largest object image, at least 256 bytes.
+  size_t capacity_ = 0;
+  LazyBuffer buffers_;            // holds the spans below, reserved by prepare()
+  std::span<uint8_t> data_;       // segmented transfer data (upload snapshot, download bytes)
+  std::span<uint8_t> info_buf_;   // object / entry description being fragmented
+  // Only when capacity_ > kStackScratch (else the request's stack holds them, see scratch()):
+  std::span<uint8_t> scratch_;    // candidate image / padded entry value before commit
+  std::span<uint8_t> value_;      // one entry's value during a complete-access write check
   EmergencyQueue<kEmergencySlots> emergencies_;
   mailbox::Error error_ = mailbox::Error::None;  // the current request's mailbox error
 };

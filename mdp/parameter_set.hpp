@@ -23,7 +23,7 @@ class ParameterSet {
   // CRC-32 over (index, subindex, data type, bit length) of every parameter, in order.
   uint32_t fingerprint() const { return fingerprint_; }
   size_t payload_bytes() const { return payload_bytes_; }
-  size_t count() const { return refs_.size(); }
+  size_t count() const { return count_; }
   std::vector<uint8_t> capture() const;
   // False (and nothing changed) when the payload does not have this set's size.
   bool apply(std::span<const uint8_t> payload) const;
@@ -34,14 +34,37 @@ class ParameterSet {
   std::string check(std::span<const uint8_t> payload) const;
 
  private:
+  // One stored parameter: an entry and its bytes in the payload.
   struct Ref {
     coe::Object* object;
     uint8_t subindex;
     uint16_t bytes;
     bool raw;  // byte-aligned whole bytes: copied as is; else an integer via get_u/set_u
   };
+  // Consecutive parameters of one object with consecutive subindices and the same size and
+  // kind, kept as one run (0xF030's 255 module entries are one run): the set's memory grows
+  // with the objects it stores, not with their entries.
+  struct Run {
+    coe::Object* object;
+    uint8_t first;
+    uint8_t last;
+    uint16_t bytes;
+    bool raw;
+  };
+  // Calls f(const Ref&) for every parameter in payload order.
+  template <class F>
+  void for_each_ref(F&& f) const {
+    for (const Run& run : runs_) {
+      for (unsigned sub = run.first; sub <= run.last; ++sub) {
+        f(Ref{run.object, static_cast<uint8_t>(sub), run.bytes, run.raw});
+      }
+    }
+  }
+  void push(const Ref& ref);
+
   const coe::ObjectDictionary* od_;
-  std::vector<Ref> refs_;
+  std::vector<Run> runs_;
+  size_t count_ = 0;
   uint32_t fingerprint_ = 0;
   size_t payload_bytes_ = 0;
 };
