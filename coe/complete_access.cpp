@@ -136,8 +136,7 @@ AbortCode SdoServer::write_complete(Object& obj, uint8_t subindex, std::span<con
     if (AbortCode rc = check_write_access(e.access, state); rc != AbortCode::None) {
       return rc;
     }
-    uint8_t* value =
-        e.byte_length() <= local_value.size() ? local_value.data() : value_.data();
+    uint8_t* value = e.byte_length() <= local_value.size() ? local_value.data() : value_.data();
     std::memset(value, 0, e.byte_length());
     copy_bits(value, 0, cand, e.bit_offset, bits);
     if (AbortCode rc = check_value(od_, obj, e, {value, e.byte_length()}, {cand, image.size()});

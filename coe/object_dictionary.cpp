@@ -3,6 +3,7 @@
 #include "coe/object_dictionary.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <stdexcept>
 
 #include "coe/bits.hpp"
@@ -11,30 +12,52 @@
 namespace rackcat::coe {
 
 Object::Object(uint16_t index, ObjectCode code, std::string name, uint16_t data_type)
-    : index_(index),
-      code_(code),
-      name_(std::move(name)),
-      data_type_(data_type),
-      entries_(std::make_shared<std::vector<Entry>>()) {}
+    : index_(index) {
+  auto desc = std::make_shared<ObjectDescription>();
+  desc->name = std::move(name);
+  desc->entries = std::make_shared<std::vector<Entry>>();
+  desc->data_type = data_type;
+  desc->code = code;
+  desc_ = std::move(desc);
+}
+
+ObjectDescription& Object::writable_description() {
+  if (shared_ || desc_.use_count() > 1) {
+    desc_ = std::make_shared<ObjectDescription>(*desc_);
+    shared_ = false;
+  }
+  // A description this object owns alone was created by make_shared of a non-const one (in
+  // the constructor or above).
+  return const_cast<ObjectDescription&>(*desc_);  // NOLINT(cppcoreguidelines-pro-type-const-cast)
+}
 
 std::vector<Entry>& Object::writable_entries() {
-  if (entries_shared_ || entries_.use_count() > 1) {
-    entries_ = std::make_shared<std::vector<Entry>>(*entries_);
+  ObjectDescription& desc = writable_description();
+  // The entry list may be shared with objects of other descriptions: copy it first.
+  if (entries_shared_ || desc.entries.use_count() > 1) {
+    desc.entries = std::make_shared<std::vector<Entry>>(*desc.entries);
     entries_shared_ = false;
   }
-  // A list this object owns alone was created by make_shared of a non-const vector (in the
-  // constructor or above); shared ones were copied above.
   return const_cast<std::vector<Entry>&>(
-      *entries_);  // NOLINT(cppcoreguidelines-pro-type-const-cast)
+      *desc.entries);  // NOLINT(cppcoreguidelines-pro-type-const-cast)
 }
 
 void Object::share_entries() {
-  entries_ = intern_entries(std::move(entries_));
+  desc_ = intern_description(std::move(desc_));
+  shared_ = true;
   entries_shared_ = true;
+}
+
+void Object::set_packed(bool packed) {
+  if (desc_->packed != packed) writable_description().packed = packed;
 }
 
 Entry& Object::add(Entry e) {
   std::vector<Entry>& list = writable_entries();
+  ObjectDescription& desc = const_cast<ObjectDescription&>(
+      *desc_);  // NOLINT(cppcoreguidelines-pro-type-const-cast): writable since the line above
+  const ObjectCode code = desc.code;
+  uint16_t& next_bit = desc.next_bit;
   if (!list.empty() && e.subindex <= list.back().subindex) {
     throw std::logic_error("object " + std::to_string(index_) + ": subindex out of order");
   }
@@ -48,32 +71,33 @@ Entry& Object::add(Entry e) {
     }
   }
   // Subindex 0 of an ARRAY/RECORD takes 16 bits in complete access (ETG.1000.6 §5.6.2.1.4).
-  const bool sub0_slot = code_ != ObjectCode::Var && e.subindex == 0;
+  const bool sub0_slot = code != ObjectCode::Var && e.subindex == 0;
   if (list.empty() || e.bit_offset == 0) {
-    uint16_t pos = list.empty() ? e.bit_offset : next_bit_;
+    uint16_t pos = list.empty() ? e.bit_offset : next_bit;
     // A padding entry fills the bits up to the next entry exactly (the guide's BIT1 + pad_15
     // of 0x2000:0B/0C are 16 bits together): it is never moved to a byte boundary.
-    if (!packed_ && !e.padding && e.bit_length >= 8 && (pos % 8) != 0) {
+    if (!desc.packed && !e.padding && e.bit_length >= 8 && (pos % 8) != 0) {
       pos = static_cast<uint16_t>(pos + 8 - pos % 8);
     }
     e.bit_offset = pos;
-  } else if (e.bit_offset < next_bit_) {
+  } else if (e.bit_offset < next_bit) {
     throw std::logic_error("object " + std::to_string(index_) + ": overlapping bit offset");
   }
-  next_bit_ = static_cast<uint16_t>(e.bit_offset + (sub0_slot ? 16 : e.bit_length));
-  combined_access_ |= e.access;
+  next_bit = static_cast<uint16_t>(e.bit_offset + (sub0_slot ? 16 : e.bit_length));
+  desc.combined_access |= e.access;
   list.push_back(std::move(e));
   return list.back();
 }
 
 void Object::finalize() {
-  image_.assign((static_cast<size_t>(next_bit_) + 7) / 8, 0);
+  image_.assign_zero((static_cast<size_t>(desc_->next_bit) + 7) / 8);
   load_defaults();
 }
 
 void Object::load_defaults() {
-  std::fill(image_.begin(), image_.end(), 0);
-  for (const Entry& e : *entries_) {
+  std::memset(image_.data(), 0, image_.size());
+  const std::vector<Entry>& entries = *desc_->entries;
+  for (const Entry& e : entries) {
     if (e.default_value.empty()) {
       continue;
     }
@@ -84,8 +108,8 @@ void Object::load_defaults() {
     copy_bits(image_.data(), e.bit_offset, e.default_value.data(), 0, bits);
   }
   // An ARRAY/RECORD without a default for subindex 0 starts with all entries in use.
-  if (code_ != ObjectCode::Var && !entries_->empty() && entries_->front().subindex == 0 &&
-      entries_->front().default_value.empty() && !image_.empty()) {
+  if (code() != ObjectCode::Var && !entries.empty() && entries.front().subindex == 0 &&
+      entries.front().default_value.empty() && !image_.empty()) {
     image_[0] = max_subindex();
   }
 }
@@ -103,20 +127,22 @@ bool Object::set_default(uint8_t subindex, std::span<const uint8_t> value) {
 }
 
 const Entry* Object::entry(uint8_t subindex) const {
-  if (subindex < entries_->size() && (*entries_)[subindex].subindex == subindex) {
-    return &(*entries_)[subindex];
+  const std::vector<Entry>& entries = *desc_->entries;
+  if (subindex < entries.size() && entries[subindex].subindex == subindex) {
+    return &entries[subindex];
   }
-  auto it = std::lower_bound(entries_->begin(), entries_->end(), subindex,
+  auto it = std::lower_bound(entries.begin(), entries.end(), subindex,
                              [](const Entry& e, uint8_t s) { return e.subindex < s; });
-  return (it != entries_->end() && it->subindex == subindex) ? &*it : nullptr;
+  return (it != entries.end() && it->subindex == subindex) ? &*it : nullptr;
 }
 
 uint8_t Object::max_subindex() const {
-  return entries_->empty() ? 0 : entries_->back().subindex;
+  const std::vector<Entry>& entries = *desc_->entries;
+  return entries.empty() ? 0 : entries.back().subindex;
 }
 
 uint8_t Object::sub0() const {
-  if (code_ == ObjectCode::Var || image_.empty()) {
+  if (code() == ObjectCode::Var || image_.empty()) {
     return 0;
   }
   return image_[0];
@@ -124,11 +150,11 @@ uint8_t Object::sub0() const {
 
 size_t Object::ca_end_bit(uint8_t last) const {
   size_t end = 0;
-  for (const Entry& e : *entries_) {
+  for (const Entry& e : *desc_->entries) {
     if (e.subindex > last) {
       break;
     }
-    const bool sub0_slot = code_ != ObjectCode::Var && e.subindex == 0;
+    const bool sub0_slot = code() != ObjectCode::Var && e.subindex == 0;
     end = std::max<size_t>(end, e.bit_offset + (sub0_slot ? 16u : e.bit_length));
   }
   return end;
@@ -144,7 +170,7 @@ std::span<uint8_t> Object::bytes(uint8_t subindex) {
     return {};
   }
   const size_t len = std::min<size_t>(e->byte_length(), image_.size() - first);
-  return std::span<uint8_t>(image_).subspan(first, len);
+  return image_.span().subspan(first, len);
 }
 
 std::span<const uint8_t> Object::bytes(uint8_t subindex) const {
@@ -206,21 +232,22 @@ std::string Object::get_string(uint8_t subindex) const {
 }
 
 ObjectDictionary::ObjectDictionary(const ObjectDictionary& other)
-    : objects_(other.objects_), enums_(other.enums_) {
-  rebuild_index();
+    : keys_(other.keys_), enums_(other.enums_) {
+  objects_.reserve(other.objects_.size());
+  for (const auto& o : other.objects_) objects_.push_back(std::make_unique<Object>(*o));
 }
 
 ObjectDictionary& ObjectDictionary::operator=(const ObjectDictionary& other) {
   if (this != &other) {
-    objects_ = other.objects_;
-    enums_ = other.enums_;
-    rebuild_index();
+    ObjectDictionary copy(other);
+    *this = std::move(copy);
   }
   return *this;
 }
 
 Object& ObjectDictionary::add(Object object) {
-  if (objects_.count(object.index())) {
+  const size_t pos = lower_bound(object.index());
+  if (pos < keys_.size() && keys_[pos] == object.index()) {
     throw std::logic_error("object dictionary: index added twice: " +
                            std::to_string(object.index()));
   }
@@ -229,10 +256,10 @@ Object& ObjectDictionary::add(Object object) {
   }
   object.share_entries();
   const uint16_t index = object.index();
-  auto [it, inserted] = objects_.emplace(index, std::move(object));
-  (void)inserted;
-  rebuild_index();
-  return it->second;
+  auto it = objects_.insert(objects_.begin() + static_cast<std::ptrdiff_t>(pos),
+                            std::make_unique<Object>(std::move(object)));
+  keys_.insert(keys_.begin() + static_cast<std::ptrdiff_t>(pos), index);
+  return **it;
 }
 
 void ObjectDictionary::add_enum(EnumType type) {
@@ -241,22 +268,13 @@ void ObjectDictionary::add_enum(EnumType type) {
 }
 
 bool ObjectDictionary::remove(uint16_t index) {
-  if (!objects_.erase(index)) {
+  const size_t pos = lower_bound(index);
+  if (pos >= keys_.size() || keys_[pos] != index) {
     return false;
   }
-  rebuild_index();
+  objects_.erase(objects_.begin() + static_cast<std::ptrdiff_t>(pos));
+  keys_.erase(keys_.begin() + static_cast<std::ptrdiff_t>(pos));
   return true;
-}
-
-void ObjectDictionary::rebuild_index() {
-  keys_.clear();
-  sorted_.clear();
-  keys_.reserve(objects_.size());
-  sorted_.reserve(objects_.size());
-  for (auto& [index, obj] : objects_) {
-    keys_.push_back(index);
-    sorted_.push_back(&obj);
-  }
 }
 
 size_t ObjectDictionary::lower_bound(uint16_t index) const {
@@ -265,7 +283,7 @@ size_t ObjectDictionary::lower_bound(uint16_t index) const {
 
 Object* ObjectDictionary::find(uint16_t index) {
   const size_t pos = lower_bound(index);
-  return (pos < keys_.size() && keys_[pos] == index) ? sorted_[pos] : nullptr;
+  return (pos < keys_.size() && keys_[pos] == index) ? objects_[pos].get() : nullptr;
 }
 
 const Object* ObjectDictionary::find(uint16_t index) const {
@@ -279,7 +297,7 @@ const EnumType* ObjectDictionary::find_enum(uint16_t index) const {
 
 size_t ObjectDictionary::max_image_bytes() const {
   size_t m = 0;
-  for (const Object* o : sorted_) {
+  for (const auto& o : objects_) {
     m = std::max(m, o->image().size());
   }
   return m;

@@ -21,6 +21,7 @@
 #include "coe/abort_code.hpp"
 #include "coe/access.hpp"
 #include "coe/data_type.hpp"
+#include "coe/object_image.hpp"
 
 namespace rackcat::coe {
 
@@ -81,6 +82,22 @@ inline Entry make_entry(uint8_t subindex, std::string name, DataType type, uint1
 
 class Object;
 
+// What an object is, apart from its index and its values: name, object code, type, entry
+// descriptions and layout (ETG.1000.6 §5.6.3.5, §5.6.3.6). Identical devices describe their
+// objects identically, so a description is shared by every object that has it (interned when
+// the object enters a dictionary, coe/shared_entries.hpp); only the index, the value image and
+// the hooks are per object.
+struct ObjectDescription {
+  std::string name;
+  // The entry descriptions, themselves shared between objects listing identical entries.
+  std::shared_ptr<const std::vector<Entry>> entries;
+  uint16_t data_type = 0;
+  uint16_t combined_access = 0;
+  uint16_t next_bit = 0;
+  ObjectCode code = ObjectCode::Var;
+  bool packed = false;
+};
+
 // Live values and command objects. All hooks are optional; a hook runs on the request path and
 // must not allocate.
 struct ObjectHooks {
@@ -108,10 +125,10 @@ class Object {
   Object(uint16_t index, ObjectCode code, std::string name, uint16_t data_type = 0);
 
   uint16_t index() const { return index_; }
-  ObjectCode code() const { return code_; }
-  const std::string& name() const { return name_; }
+  ObjectCode code() const { return desc_->code; }
+  const std::string& name() const { return desc_->name; }
   // VAR: the value's type; ARRAY: the element type; RECORD: the record's type index (may be 0).
-  uint16_t data_type() const { return data_type_; }
+  uint16_t data_type() const { return desc_->data_type; }
 
   // Add entries in subindex order. For ARRAY/RECORD add subindex 0 first (UNSIGNED8, 8 bits);
   // the builder places it in 16 bits as complete access requires. Bit offsets are assigned
@@ -125,12 +142,12 @@ class Object {
   // Call once after the last add(): sizes the image and loads defaults. add() after
   // finalize() is allowed (finalize again).
   void finalize();
-  void set_packed(bool packed) { packed_ = packed; }
-  bool packed() const { return packed_; }
+  void set_packed(bool packed);
+  bool packed() const { return desc_->packed; }
 
-  const std::vector<Entry>& entries() const { return *entries_; }
-  // Shares the entry descriptions with every other object described identically (see
-  // coe/shared_entries.hpp; ObjectDictionary::add calls it). add() afterwards copies them first.
+  const std::vector<Entry>& entries() const { return *desc_->entries; }
+  // Shares the description with every other object described identically (see
+  // coe/shared_entries.hpp; ObjectDictionary::add calls it). add() afterwards copies it first.
   void share_entries();
   const Entry* entry(uint8_t subindex) const;
   // Highest subindex defined (ETG.1000.6 "MaxSubindex" of SDO information).
@@ -138,14 +155,14 @@ class Object {
   // For ARRAY/RECORD: the current value of subindex 0 (number of entries in use).
   uint8_t sub0() const;
   // OR of all entries' access words (for SDO Information list types 2..5).
-  uint16_t combined_access() const { return combined_access_; }
+  uint16_t combined_access() const { return desc_->combined_access; }
   // Bits of the complete-access image covering subindex 0 (or 1) up to subindex `last`
   // (inclusive; entries above `last` excluded). Used for complete access lengths.
   size_t ca_end_bit(uint8_t last) const;
 
   // The value image, complete-access layout.
-  std::span<uint8_t> image() { return image_; }
-  std::span<const uint8_t> image() const { return image_; }
+  std::span<uint8_t> image() { return image_.span(); }
+  std::span<const uint8_t> image() const { return image_.span(); }
   size_t bit_size() const { return image_.size() * 8; }
 
   // Typed helpers for device code (little-endian, by subindex). bytes() is the entry's byte
@@ -168,19 +185,15 @@ class Object {
   ObjectHooks hooks;
 
  private:
-  uint16_t index_;
-  ObjectCode code_;
-  std::string name_;
-  uint16_t data_type_;
+  // The description, copied first when it is shared (copy-on-write).
+  ObjectDescription& writable_description();
   std::vector<Entry>& writable_entries();
 
-  // The descriptions, possibly shared with other objects (copy-on-write in add()).
-  std::shared_ptr<const std::vector<Entry>> entries_;
-  bool entries_shared_ = false;
-  std::vector<uint8_t> image_;
-  bool packed_ = false;
-  uint16_t combined_access_ = 0;
-  uint16_t next_bit_ = 0;
+  uint16_t index_;
+  bool shared_ = false;          // desc_ is interned: never changed in place
+  bool entries_shared_ = false;  // desc_->entries is interned: never changed in place
+  ObjectImage image_;
+  std::shared_ptr<const ObjectDescription> desc_;
 };
 
 class ObjectDictionary {
@@ -188,7 +201,7 @@ class ObjectDictionary {
   ObjectDictionary() = default;
   ObjectDictionary(const ObjectDictionary& other);
   ObjectDictionary& operator=(const ObjectDictionary& other);
-  ObjectDictionary(ObjectDictionary&&) = default;  // map nodes move with the index
+  ObjectDictionary(ObjectDictionary&&) = default;  // the objects stay where they are
   ObjectDictionary& operator=(ObjectDictionary&&) = default;
 
   // Adds an object (call Object::finalize() first or let add() do it). Replaces nothing:
@@ -199,15 +212,15 @@ class ObjectDictionary {
   // Removes an object (e.g. a module unplugged at start-up); false if absent.
   bool remove(uint16_t index);
 
-  // O(log n) over a sorted flat index: the SDO request path's lookup.
+  // O(log n) over the sorted flat index: the SDO request path's lookup.
   Object* find(uint16_t index);
   const Object* find(uint16_t index) const;
   const EnumType* find_enum(uint16_t index) const;
 
   // Position-based access in index order (0 .. size()-1), for resumable SDO Information
   // lists; lower_bound gives the position of the first object with index >= `index`.
-  const Object& at(size_t position) const { return *sorted_[position]; }
-  Object& at(size_t position) { return *sorted_[position]; }
+  const Object& at(size_t position) const { return *objects_[position]; }
+  Object& at(size_t position) { return *objects_[position]; }
   size_t lower_bound(uint16_t index) const;
   // Largest object image in bytes (sizes the SDO server's transfer buffer).
   size_t max_image_bytes() const;
@@ -215,26 +228,25 @@ class ObjectDictionary {
   // Objects in index order (for SDO Information lists, the `od` command and the ESI).
   template <class F>
   void for_each(F&& f) const {
-    for (const auto& [index, obj] : objects_) {
-      f(obj);
+    for (const auto& obj : objects_) {
+      f(static_cast<const Object&>(*obj));
     }
   }
   template <class F>
   void for_each(F&& f) {
-    for (auto& [index, obj] : objects_) {
-      f(obj);
+    for (auto& obj : objects_) {
+      f(*obj);
     }
   }
   size_t size() const { return objects_.size(); }
   const std::map<uint16_t, EnumType>& enums() const { return enums_; }
 
  private:
-  void rebuild_index();
-
-  std::map<uint16_t, Object> objects_;  // node-based: Object& stays valid across add()
+  // Objects in index order, each in its own block: Object& stays valid across add() and
+  // remove() of other objects. keys_ is the parallel index list the lookup searches.
+  std::vector<std::unique_ptr<Object>> objects_;
+  std::vector<uint16_t> keys_;
   std::map<uint16_t, EnumType> enums_;
-  std::vector<uint16_t> keys_;  // sorted indices, parallel to sorted_
-  std::vector<Object*> sorted_;
 };
 
 }  // namespace rackcat::coe

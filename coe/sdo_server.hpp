@@ -149,12 +149,12 @@ class SdoServer {
   InfoTransfer info_;
   // The largest value a transfer can move: the largest object image, at least 256 bytes.
   size_t capacity_ = 0;
-  LazyBuffer buffers_;            // holds the spans below, reserved by prepare()
-  std::span<uint8_t> data_;       // segmented transfer data (upload snapshot, download bytes)
-  std::span<uint8_t> info_buf_;   // object / entry description being fragmented
+  LazyBuffer buffers_;           // holds the spans below, reserved by prepare()
+  std::span<uint8_t> data_;      // segmented transfer data (upload snapshot, download bytes)
+  std::span<uint8_t> info_buf_;  // object / entry description being fragmented
   // Only when capacity_ > kStackScratch (else the request's stack holds them, see scratch()):
-  std::span<uint8_t> scratch_;    // candidate image / padded entry value before commit
-  std::span<uint8_t> value_;      // one entry's value during a complete-access write check
+  std::span<uint8_t> scratch_;  // candidate image / padded entry value before commit
+  std::span<uint8_t> value_;    // one entry's value during a complete-access write check
   EmergencyQueue<kEmergencySlots> emergencies_;
   mailbox::Error error_ = mailbox::Error::None;  // the current request's mailbox error
 };

@@ -47,14 +47,55 @@ uint64_t hash_of(const std::vector<Entry>& entries) {
   return h.h;
 }
 
+// Descriptions are equal when every field is, the entry lists by identity (both interned).
+bool same(const ObjectDescription& a, const ObjectDescription& b) {
+  return a.name == b.name && a.entries == b.entries && a.data_type == b.data_type &&
+         a.combined_access == b.combined_access && a.next_bit == b.next_bit && a.code == b.code &&
+         a.packed == b.packed;
+}
+bool same(const std::vector<Entry>& a, const std::vector<Entry>& b) {
+  return a == b;
+}
+
+uint64_t hash_of(const ObjectDescription& d) {
+  Hasher h;
+  h.text(d.name);
+  h.value(d.entries.get());
+  h.value(d.data_type);
+  h.value(d.combined_access);
+  h.value(d.next_bit);
+  h.value(d.code);
+  h.value(d.packed);
+  return h.h;
+}
+
+template <typename T>
 struct Table {
   std::mutex mutex;
-  std::unordered_multimap<uint64_t, std::weak_ptr<const std::vector<Entry>>> lists;
+  std::unordered_multimap<uint64_t, std::weak_ptr<const T>> items;
+
+  std::shared_ptr<const T> intern(std::shared_ptr<const T> item) {
+    const uint64_t key = hash_of(*item);
+    std::lock_guard lock(mutex);
+    auto [first, last] = items.equal_range(key);
+    for (auto it = first; it != last;) {
+      if (auto shared = it->second.lock()) {
+        if (shared == item) return item;  // interned already
+        if (same(*shared, *item)) return shared;
+        ++it;
+      } else {
+        it = items.erase(it);  // no object uses it any more
+      }
+    }
+    items.emplace(key, item);
+    return item;
+  }
 };
 
-Table& table() {
-  static auto* const t = new Table();  // NOLINT(cppcoreguidelines-owning-memory): never freed,
-  return *t;                           // dictionaries may outlive static destruction order
+template <typename T>
+Table<T>& table() {
+  static auto* const t = new Table<T>();  // NOLINT(cppcoreguidelines-owning-memory): never
+  return *t;  // freed, dictionaries may outlive static destruction order
 }
 
 }  // namespace
@@ -62,21 +103,19 @@ Table& table() {
 std::shared_ptr<const std::vector<Entry>> intern_entries(
     std::shared_ptr<const std::vector<Entry>> entries) {
   if (!entries || entries->empty()) return entries;
-  const uint64_t key = hash_of(*entries);
-  Table& t = table();
-  std::lock_guard lock(t.mutex);
-  auto [first, last] = t.lists.equal_range(key);
-  for (auto it = first; it != last;) {
-    if (auto shared = it->second.lock()) {
-      if (shared == entries) return entries;  // interned already
-      if (*shared == *entries) return shared;
-      ++it;
-    } else {
-      it = t.lists.erase(it);  // no object uses it any more
-    }
+  return table<std::vector<Entry>>().intern(std::move(entries));
+}
+
+std::shared_ptr<const ObjectDescription> intern_description(
+    std::shared_ptr<const ObjectDescription> desc) {
+  if (!desc) return desc;
+  auto entries = intern_entries(desc->entries);
+  if (entries != desc->entries) {
+    auto copy = std::make_shared<ObjectDescription>(*desc);
+    copy->entries = std::move(entries);
+    desc = std::move(copy);
   }
-  t.lists.emplace(key, entries);
-  return entries;
+  return table<ObjectDescription>().intern(std::move(desc));
 }
 
 }  // namespace rackcat::coe
