@@ -224,3 +224,52 @@ TEST_F(SdoTest, WritesToObjectsLargerThanThePreparedBuffersAbortCleanly) {
 
 }  // namespace
 }  // namespace rackcat::coe::test
+
+namespace rackcat::coe::test {
+namespace {
+
+TEST_F(SdoTest, ValuesLargerThanTheStackScratchUseTheReservedBuffers) {
+  // A request's candidate value and image sit on the stack up to SdoServer::kStackScratch
+  // bytes; larger objects stage in buffers prepare() reserves. Same answers either way.
+  static_assert(SdoServer::kStackScratch < 5000);
+  od.add(var(0x5002, "Huge", DataType::OctetString, 8 * 5000, access::kRw));
+  Object rec(0x5003, ObjectCode::Record, "Huge record");
+  rec.add(entry(0, "SubIndex 000", DataType::Unsigned8, 8, access::kReadAll, {2}));
+  rec.add(entry(1, "Blob", DataType::OctetString, 8 * 5000, access::kRw));
+  rec.add(entry(2, "Word", DataType::Unsigned16, 16, access::kRw));
+  rec.finalize();
+  od.add(std::move(rec));
+  server.prepare();
+
+  Bytes blob(5000);
+  for (size_t i = 0; i < blob.size(); ++i) blob[i] = static_cast<uint8_t>(i * 7 + 3);
+  constexpr size_t kMailbox = 8192;  // the whole value in one normal transfer
+  EXPECT_EQ(payload(sdo(download_normal(0x5002, 0, blob), EsmState::PreOp, kMailbox)),
+            download_ok(0x5002, 0));
+  const auto image = od.find(0x5002)->image();
+  EXPECT_TRUE(std::equal(blob.begin(), blob.end(), image.begin(), image.end()));
+  const Bytes up = payload(sdo(upload_req(0x5002, 0), EsmState::PreOp, kMailbox));
+  ASSERT_EQ(up.size(), 10u + blob.size());
+  EXPECT_EQ(up[2], 0x41);  // normal upload response, size indicated
+  EXPECT_TRUE(std::equal(blob.begin(), blob.end(), up.begin() + 10));
+
+  // Complete access from subindex 1: the 5002-byte candidate image and the 5000-byte entry.
+  Bytes ca(blob.rbegin(), blob.rend());
+  ca.push_back(0x34);
+  ca.push_back(0x12);
+  EXPECT_EQ(payload(sdo(download_normal(0x5003, 1, ca, true), EsmState::PreOp, kMailbox)),
+            download_ok(0x5003, 1, true));
+  const Object& r = *od.find(0x5003);
+  EXPECT_EQ(r.get_u(2), 0x1234u);
+  EXPECT_TRUE(std::equal(blob.rbegin(), blob.rend(), r.bytes(1).begin(), r.bytes(1).end()));
+  // A refused value in the large candidate commits nothing.
+  od.find(0x5003)->hooks.validate_write = [](const Object&, int, std::span<const uint8_t>,
+                                             EsmState) { return AbortCode::ValueTooHigh; };
+  EXPECT_EQ(
+      payload(sdo(download_normal(0x5003, 1, Bytes(5002, 0), true), EsmState::PreOp, kMailbox)),
+      abort_payload(0x5003, 1, static_cast<uint32_t>(AbortCode::ValueTooHigh)));
+  EXPECT_EQ(r.get_u(2), 0x1234u);
+}
+
+}  // namespace
+}  // namespace rackcat::coe::test
