@@ -1,5 +1,6 @@
 #include "coe/shared_entries.hpp"
 
+#include <cstdint>
 #include <mutex>
 #include <string_view>
 #include <unordered_map>
@@ -60,7 +61,7 @@ bool same(const std::vector<Entry>& a, const std::vector<Entry>& b) {
 uint64_t hash_of(const ObjectDescription& d) {
   Hasher h;
   h.text(d.name);
-  h.value(d.entries.get());
+  h.value(reinterpret_cast<uintptr_t>(d.entries.get()));  // interned: identity is equality
   h.value(d.data_type);
   h.value(d.combined_access);
   h.value(d.next_bit);
