@@ -201,6 +201,7 @@ class Esc {
   // register_map.cpp: write masks and side effects of register accesses.
   void write_registers(uint16_t address, const uint8_t* src, uint16_t len);
   void after_register_write(uint16_t address, const uint8_t* src, uint16_t len);
+  void dc_registers_written(uint16_t address, const uint8_t* src, uint16_t len);
   void before_register_read(uint16_t address, uint16_t len);
   void after_register_read(uint16_t address, uint16_t len);
   // write_protection.cpp
@@ -233,14 +234,15 @@ class Esc {
   // Calls f(n) for every enabled SyncManager n whose buffer meets bytes [address, end).
   template <class F>
   void for_each_sm_meeting(uint32_t address, uint32_t end, F&& f) const {
+    if (end <= sm_first_byte_) return;  // e.g. a register access
     for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= static_cast<uint16_t>(mask - 1)) {
       const int n = __builtin_ctz(mask);
       const SmState& s = sm_[n];
       if (address < static_cast<uint32_t>(s.start) + s.length && s.start < end) f(n);
     }
   }
-  void update_ecat_event(int index);
-  void update_al_event(int index);
+  // ECAT event request 0x0210 bit 4+n and AL event request 0x0220 bit 8+n from SM n's status.
+  void update_sm_events(int index);
   // pdi.cpp: the microcontroller's accesses.
   bool pdi_buffer_write(uint16_t address, const uint8_t* src, uint16_t len);
   void pdi_buffer_read_done(uint16_t address, uint16_t len);

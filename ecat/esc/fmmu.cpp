@@ -21,6 +21,26 @@ inline uint8_t byte_mask(uint64_t byte, uint64_t lo, uint64_t hi) {
   return mask;
 }
 
+// Byte-aligned mapping (the physical bit of a logical bit has the same position in its byte):
+// moves logical bits lo..hi from `from` to `to`, both pointing at the byte that holds bit
+// `lo`. The partial first and last bytes are merged under their masks (ETG.1000.4 §6.6: bits
+// outside the mapping stay as they are), the whole bytes between go in one copy.
+void merge_bits(uint8_t* to, const uint8_t* from, uint64_t lo, uint64_t hi) {
+  const uint64_t bytes = hi / 8 - lo / 8 + 1;
+  const auto first = static_cast<uint8_t>(0xFF << (lo % 8));
+  const auto last = static_cast<uint8_t>(0xFF >> (7 - hi % 8));
+  auto merge = [&](uint64_t i, uint8_t mask) {
+    to[i] = static_cast<uint8_t>((to[i] & ~mask) | (from[i] & mask));
+  };
+  if (bytes == 1) {
+    merge(0, static_cast<uint8_t>(first & last));
+    return;
+  }
+  merge(0, first);
+  if (bytes > 2) std::memcpy(to + 1, from + 1, bytes - 2);
+  merge(bytes - 1, last);
+}
+
 struct Span {
   uint64_t lo = 0;          // first logical bit mapped and inside the datagram
   uint64_t hi = 0;          // last one
@@ -173,13 +193,7 @@ bool Esc::fmmu_read(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_lo
   if (registers) before_register_read(first, reg_len);
   if (s.shift % 8 == 0) {
     // Physical and logical bit positions agree: copy whole bytes, masking the edges.
-    const int64_t byte_shift = s.shift / 8;
-    for (uint64_t b = lo / 8; b <= hi / 8; ++b) {
-      const uint8_t mask = byte_mask(b, lo, hi);
-      uint8_t& d = data[b - dg_lo / 8];
-      const uint8_t m = mem_[static_cast<uint64_t>(static_cast<int64_t>(b) + byte_shift)];
-      d = static_cast<uint8_t>((d & ~mask) | (m & mask));
-    }
+    merge_bits(&data[lo / 8 - dg_lo / 8], &mem_[s.phys_first], lo, hi);
   } else {
     for (uint64_t bit = lo; bit <= hi; ++bit) {
       const uint64_t pb = static_cast<uint64_t>(static_cast<int64_t>(bit) + s.shift);
@@ -202,6 +216,12 @@ bool Esc::fmmu_write(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_l
   const auto plen = static_cast<uint16_t>(s.phys_len);
   if (!sm_allows_write(first, plen)) return false;
   if (write_protection_active() && !write_allowed(reg::kProcessRam)) return false;  // ESC-wide
+  if (s.shift % 8 == 0 && s.phys_first >= reg::kProcessRam) {
+    // Process RAM, byte-aligned (the usual process-data mapping): no register rules apply.
+    merge_bits(&mem_[s.phys_first], &data[lo / 8 - dg_lo / 8], lo, hi);
+    sm_after_write(first, plen);
+    return true;
+  }
   // Registers keep their write masks and side effects: merge into a copy of the current
   // bytes, then write that copy through the register path in chunks.
   std::array<uint8_t, 256> chunk{};

@@ -72,8 +72,7 @@ void Esc::pdi_read(uint16_t address, uint8_t* dst, uint16_t len) {
   if (len == 0) return;
   std::memcpy(dst, &mem_[address], len);
   if (address < reg::kProcessRam) pdi_registers_read(address, len);
-  // A register read (e.g. AL event request 0x0220) meets no SyncManager buffer.
-  if (static_cast<uint32_t>(address) + len > sm_first_byte_) pdi_buffer_read_done(address, len);
+  pdi_buffer_read_done(address, len);
 }
 
 void Esc::pdi_write(uint16_t address, const uint8_t* src, uint16_t len) {

@@ -89,21 +89,37 @@ constexpr uint8_t kResetSequence[3] = {'R', 'E', 'S'};
 }  // namespace
 
 void Esc::write_registers(uint16_t address, const uint8_t* src, uint16_t len) {
+  // The EEPROM interface's address and data are the PDI's while it holds the EEPROM;
+  // SyncManager start/length/control can only be changed while the SM is disabled.
+  const bool sii_pdi =
+      overlaps(address, len, reg::kSiiAddress, reg::kSiiData + 8 - reg::kSiiAddress) &&
+      sii_assigned_to_pdi();
+  const bool sms = overlaps(address, len, reg::kSm, reg::kSmSize * kSyncManagers);
+  uint8_t* const memory = mem_.data();
+  if (!sii_pdi && !sms) {
+    for (uint16_t i = 0; i < len; ++i) {
+      const uint8_t mask = kWriteMask[address + i];
+      memory[address + i] = static_cast<uint8_t>((memory[address + i] & ~mask) | (src[i] & mask));
+    }
+    return;
+  }
   for (uint16_t i = 0; i < len; ++i) {
     const uint16_t a = static_cast<uint16_t>(address + i);
     uint8_t mask = kWriteMask[a];
-    // The EEPROM interface's address and data are the PDI's while it holds the EEPROM.
-    if (a >= reg::kSiiAddress && a < reg::kSiiData + 8 && sii_assigned_to_pdi()) mask = 0;
-    // SyncManager start/length/control can only be changed while the SM is disabled.
-    if (a >= reg::kSm && a < reg::kSm + reg::kSmSize * kSyncManagers && (a & 7) < 5 &&
+    if (sii_pdi && a >= reg::kSiiAddress && a < reg::kSiiData + 8) mask = 0;
+    if (sms && a >= reg::kSm && a < reg::kSm + reg::kSmSize * kSyncManagers && (a & 7) < 5 &&
         sm_[(a - reg::kSm) >> 3].enabled) {
       mask = 0;
     }
-    mem_[a] = static_cast<uint8_t>((mem_[a] & ~mask) | (src[i] & mask));
+    memory[a] = static_cast<uint8_t>((memory[a] & ~mask) | (src[i] & mask));
   }
 }
 
 void Esc::after_register_write(uint16_t address, const uint8_t* src, uint16_t len) {
+  if (address >= reg::kDcReceiveTimePort0) {
+    dc_registers_written(address, src, len);
+    return;
+  }
   auto written = [&](uint16_t a) { return src[a - address]; };
   write_enables_written(address, src, len);
   if (overlaps(address, len, reg::kEscReset, 1)) {
@@ -162,6 +178,13 @@ void Esc::after_register_write(uint16_t address, const uint8_t* src, uint16_t le
       }
     }
   }
+  if (static_cast<uint32_t>(address) + len > reg::kDcReceiveTimePort0) {
+    dc_registers_written(address, src, len);
+  }
+}
+
+void Esc::dc_registers_written(uint16_t address, const uint8_t* src, uint16_t len) {
+  // Distributed clocks 0x0900-0x09FF (ETG.1000.4 §6.8, ESC datasheet 0x0900-0x09B0).
   if (overlaps(address, len, reg::kDcReceiveTimePort0, 1)) dc_latch_receive_times();
   if (overlaps(address, len, reg::kDcSystemTime, 8)) dc_system_time_written(address, src, len);
   if (overlaps(address, len, reg::kDcSpeedCounterStart, 2)) {

@@ -14,6 +14,35 @@ namespace rackcat::ecat {
 
 namespace sm = reg::sm;
 
+namespace {
+
+// Sets or clears bit `bit` of the little-endian event register at `address`: one byte.
+void set_event_bit(uint8_t* memory, uint32_t address, int bit, bool pending) {
+  uint8_t& byte = memory[address + static_cast<uint32_t>(bit >> 3)];
+  const auto mask = static_cast<uint8_t>(1u << (bit & 7));
+  byte = static_cast<uint8_t>(pending ? (byte | mask) : (byte & ~mask));
+}
+
+// The events of an enabled SyncManager n with `control` and `status` (ETG.1000.4 §6.7; ESC
+// datasheet 0x0210, 0x0220): ECAT event request bits 4-11 mirror SMs 0-7 whose ECAT event is
+// enabled (control bit 4): a buffer the master reads that the PDI has filled, one it writes
+// that the PDI has emptied. AL event request bits 8-23 mirror SMs 0-15 whose AL event is
+// enabled (control bit 5): a buffer the master has written, or read, pending for the PDI until
+// the PDI accesses its first byte.
+void write_sm_events(uint8_t* memory, int n, uint8_t control, bool enabled, uint8_t status) {
+  const bool ecat_writes = sm::ecat_writes(control);
+  const uint8_t for_master = ecat_writes ? sm::kStatusRead : sm::kStatusWritten;
+  const uint8_t for_pdi = ecat_writes ? sm::kStatusWritten : sm::kStatusRead;
+  if (n < 8) {
+    set_event_bit(memory, reg::kEcatEventRequest, 4 + n,
+                  enabled && (control & 0x10) != 0 && (status & for_master) != 0);
+  }
+  set_event_bit(memory, reg::kAlEventRequest, 8 + n,
+                enabled && (control & sm::kControlAlEvent) != 0 && (status & for_pdi) != 0);
+}
+
+}  // namespace
+
 void Esc::reload_sm(int n) {
   const uint16_t base = sm::base(n);
   SmState& s = sm_[n];
@@ -35,12 +64,16 @@ void Esc::reload_sm(int n) {
   } else {
     sm_enabled_mask_ &= static_cast<uint16_t>(~(1u << n));
   }
-  sm_alone_mask_ = 0;
+  // What the buffer accesses look up: the lowest byte of any enabled SM's buffer (accesses
+  // below it meet none), and the SMs that share no byte with another (pdi_read_buffer).
   sm_first_byte_ = reg::kAddressSpace;
+  for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= static_cast<uint16_t>(mask - 1)) {
+    sm_first_byte_ = std::min<uint32_t>(sm_first_byte_, sm_[__builtin_ctz(mask)].start);
+  }
+  sm_alone_mask_ = 0;
   for (uint16_t mask = sm_enabled_mask_; mask != 0; mask &= static_cast<uint16_t>(mask - 1)) {
     const int k = __builtin_ctz(mask);
     const SmState& t = sm_[k];
-    sm_first_byte_ = std::min<uint32_t>(sm_first_byte_, t.start);
     uint16_t meeting = 0;
     for_each_sm_meeting(t.start, static_cast<uint32_t>(t.start) + t.length,
                         [&](int m) { meeting = static_cast<uint16_t>(meeting | (1u << m)); });
@@ -62,8 +95,7 @@ void Esc::reload_sm(int n) {
   // A SyncManager without a trigger source stops the process-data watchdog from being
   // retriggered; an SM2 the firmware deactivated (PREOP and below) takes it out of play.
   if (!s.active && (s.control & 0x40) && n == 2) watchdog_armed_ = false;
-  update_ecat_event(n);
-  update_al_event(n);
+  update_sm_events(n);
 }
 
 bool Esc::sm_allows_read(uint16_t address, uint16_t len) {
@@ -142,7 +174,7 @@ void Esc::sm_buffer_access(int n, uint32_t address, uint32_t end, bool filler) {
     } else if (filler) {
       status = static_cast<uint8_t>((status & ~sm::kStatusNoBuffer) | (s.next_buffer << 4) |
                                     sm::kStatusWritten);
-      s.next_buffer = static_cast<uint8_t>((s.next_buffer + 1) % 3);
+      s.next_buffer = static_cast<uint8_t>(s.next_buffer == 2 ? 0 : s.next_buffer + 1);
     } else if (sm::is_mailbox(s.control)) {
       status = static_cast<uint8_t>((status & ~(sm::kStatusFull | sm::kStatusWritten)) |
                                     sm::kStatusRead);
@@ -150,48 +182,15 @@ void Esc::sm_buffer_access(int n, uint32_t address, uint32_t end, bool filler) {
       status = static_cast<uint8_t>(status | sm::kStatusRead);
     }
   }
-  sm_status(n) = status;
-  update_ecat_event(n);
-  update_al_event(n);
-}
-
-namespace {
-
-// Sets or clears bit `bit` of the little-endian event register at `address`: one byte.
-void set_event_bit(uint8_t* memory, uint32_t address, int bit, bool pending) {
-  uint8_t& byte = memory[address + static_cast<uint32_t>(bit >> 3)];
-  const auto mask = static_cast<uint8_t>(1u << (bit & 7));
-  byte = static_cast<uint8_t>(pending ? (byte | mask) : (byte & ~mask));
-}
-
-}  // namespace
-
-void Esc::update_ecat_event(int n) {
-  // ECAT event request bits 4-11 mirror SyncManagers 0-7 whose ECAT event is enabled
-  // (control bit 4): a read buffer the PDI has filled, a write buffer the PDI has emptied.
-  if (n >= 8) return;
-  const SmState& s = sm_[n];
-  bool pending = false;
   uint8_t* const memory = mem_.data();
-  if (s.enabled && (s.control & 0x10)) {
-    const uint8_t status = memory[sm::base(n) + reg::kSmStatusOffset];
-    pending = (status & (sm::ecat_writes(s.control) ? sm::kStatusRead : sm::kStatusWritten)) != 0;
-  }
-  set_event_bit(memory, reg::kEcatEventRequest, 4 + n, pending);
+  memory[sm::base(n) + reg::kSmStatusOffset] = status;
+  write_sm_events(memory, n, s.control, s.enabled, status);
 }
 
-void Esc::update_al_event(int n) {
-  // AL event request bits 8-23 mirror SyncManagers 0-15 whose AL event is enabled (control
-  // bit 5): a buffer the master has written (ECAT writes) or read (ECAT reads) is pending for
-  // the PDI until the PDI accesses the buffer's first byte (pdi.cpp).
-  const SmState& s = sm_[n];
-  bool pending = false;
+void Esc::update_sm_events(int n) {
   uint8_t* const memory = mem_.data();
-  if (s.enabled && (s.control & 0x20)) {
-    const uint8_t status = memory[sm::base(n) + reg::kSmStatusOffset];
-    pending = (status & (sm::ecat_writes(s.control) ? sm::kStatusWritten : sm::kStatusRead)) != 0;
-  }
-  set_event_bit(memory, reg::kAlEventRequest, 8 + n, pending);
+  write_sm_events(memory, n, sm_[n].control, sm_[n].enabled,
+                  memory[sm::base(n) + reg::kSmStatusOffset]);
 }
 
 }  // namespace rackcat::ecat

@@ -40,6 +40,20 @@ TEST_F(FmmuTest, AlignedBitsKeepNeighbours) {
   EXPECT_EQ(line.esc(0).read8(0x1500), 0x3C);
 }
 
+TEST_F(FmmuTest, AlignedBitsOverSeveralBytesMergeTheEdges) {
+  // Logical 0x500 bit 3 .. 0x502 bit 5 <-> physical 0x1700 bit 3 .. 0x1702 bit 5: whole middle
+  // byte, first byte bits 3-7 (mask 0xF8), last byte bits 0-5 (mask 0x3F).
+  line.master->fpwr(0x1001, 0x0600, fmmu(0x500, 3, 3, 5, 0x1700, 3, 3));
+  line.master->fpwr(0x1001, 0x1700, {0x11, 0x22, 0x33});
+  EXPECT_EQ(line.master->send_logical(Command::Lwr, 0x500, {0xFF, 0xAB, 0xFF}).wkc, 1);
+  EXPECT_EQ(line.esc(0).read8(0x1700), 0xF9);
+  EXPECT_EQ(line.esc(0).read8(0x1701), 0xAB);
+  EXPECT_EQ(line.esc(0).read8(0x1702), 0x3F);
+  const auto r = line.master->send_logical(Command::Lrd, 0x500, {0x00, 0x00, 0x00});
+  EXPECT_EQ(r.wkc, 1);
+  EXPECT_EQ(r.data, (std::vector<uint8_t>{0xF8, 0xAB, 0x3F}));
+}
+
 TEST_F(FmmuTest, DatagramCoveringPartOfTheMapping) {
   // FMMU maps 8 logical bytes; the datagram covers bytes 4-11 of logical space from 0x404.
   line.master->fpwr(0x1001, 0x0600, fmmu_entry(0x400, 8, 0, 7, 0x1600, 0, 1));
