@@ -43,7 +43,7 @@ TEST_F(FmmuTest, AlignedBitsKeepNeighbours) {
 TEST_F(FmmuTest, AlignedBitsOverSeveralBytesMergeTheEdges) {
   // Logical 0x500 bit 3 .. 0x502 bit 5 <-> physical 0x1700 bit 3 .. 0x1702 bit 5: whole middle
   // byte, first byte bits 3-7 (mask 0xF8), last byte bits 0-5 (mask 0x3F).
-  line.master->fpwr(0x1001, 0x0600, fmmu(0x500, 3, 3, 5, 0x1700, 3, 3));
+  line.master->fpwr(0x1001, 0x0600, fmmu_entry(0x500, 3, 3, 5, 0x1700, 3, 3));
   line.master->fpwr(0x1001, 0x1700, {0x11, 0x22, 0x33});
   EXPECT_EQ(line.master->send_logical(Command::Lwr, 0x500, {0xFF, 0xAB, 0xFF}).wkc, 1);
   EXPECT_EQ(line.esc(0).read8(0x1700), 0xF9);
