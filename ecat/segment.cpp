@@ -66,11 +66,12 @@ size_t Segment::process(std::span<uint8_t> frame) {
   // administered), so a master can tell its own frame from the one the line returns.
   frame[6] |= 0x02;
   if (layout_.kind == FrameLayout::Kind::OtherType) return frame.size();
-  after_frame();
+  if (!deferred_firmware_) after_frame();
   const uint64_t t0 = clock_.now_ns();
   if (t0 >= next_event_bound_) service_at(t0);
   uint8_t* base = frame.data();
   bool mapped = resolve_logical(base);
+  size_t passed = 0;
   for (size_t k = 0; k < slaves_.size(); ++k) {
     Slave& slave = *slaves_[k];
     Esc& esc = slave.esc();
@@ -96,9 +97,14 @@ size_t Segment::process(std::span<uint8_t> frame) {
     }
     if (layout_.malformed) esc.count_frame_error();
     // The frame has left this ESC: its firmware runs in after_frame(), once the reply is out.
-    firmware_pending_ = k + 1;
+    passed = k + 1;
     if (!esc.forwards_to_port1()) break;  // last slave, or loop closed by DL control
   }
+  // A new round over every slave the frame passed (and those an unfinished round still
+  // covers), starting where the last slice stopped.
+  round_span_ = round_left_ != 0 ? std::max(round_span_, passed) : passed;
+  round_left_ = round_span_;
+  if (cursor_ >= round_span_) cursor_ = 0;
   return frame.size();
 }
 
@@ -139,9 +145,24 @@ void Segment::rebuild_logical_map() {
 }
 
 void Segment::after_frame() {
-  const size_t n = firmware_pending_;
-  firmware_pending_ = 0;
-  for (size_t k = 0; k < n; ++k) slaves_[k]->run_firmware_if_due();
+  while (round_left_ != 0) {
+    const size_t k = cursor_;
+    cursor_ = k + 1 == round_span_ ? 0 : k + 1;
+    --round_left_;
+    slaves_[k]->run_firmware_if_due();
+  }
+}
+
+bool Segment::run_firmware_slice(uint64_t budget_ns) {
+  if (round_left_ == 0) return false;
+  const uint64_t until = clock_.now_ns() + budget_ns;
+  do {
+    const size_t k = cursor_;
+    cursor_ = k + 1 == round_span_ ? 0 : k + 1;
+    --round_left_;
+    slaves_[k]->run_firmware_if_due();
+  } while (round_left_ != 0 && clock_.now_ns() < until);
+  return round_left_ != 0;
 }
 
 void Segment::service_slave(Slave& s, uint64_t now) {

@@ -122,8 +122,23 @@ class Segment {
   // work (Firmware::wants_service: an ESC event on its IRQ line, a mailbox message pending): a
   // microcontroller works between frames, so a slow mailbox service (a device reset, a store) never
   // delays the reply, which SOEM drops when it comes later than 2 ms. process() runs what a caller
-  // left pending first.
+  // left pending first, unless deferred firmware is on (set_deferred_firmware).
   void after_frame();
+  // Deferred firmware (the event loop's mode, ecat/host/runner.cpp): process() no longer runs
+  // the firmware work earlier frames left; the caller runs it in bounded slices between frames
+  // (run_firmware_slice) and answers a frame that arrives meanwhile first. Each slave's
+  // microcontroller is independent of the ESC, as on real hardware: a frame that comes before
+  // a slave's firmware ran sees that slave's ESC as the firmware left it (SM3: the last input
+  // buffer it completed, ETG.1000.4 §6.7.2 three-buffer mode; SM2: the newest complete output
+  // buffer is read when the firmware gets to it).
+  void set_deferred_firmware(bool on) { deferred_firmware_ = on; }
+  // Runs the firmware of the slaves the frames since the last complete round passed, in round-
+  // robin order from where the previous slice stopped: at least one slave, then more until
+  // `budget_ns` of clock time has gone by. Returns true while slaves of the current round are
+  // left. A frame restarts the round at the cursor (every slave it passed is run after it; no
+  // slave waits more than one round). Allocates nothing.
+  bool run_firmware_slice(uint64_t budget_ns);
+  bool firmware_pending() const { return round_left_ != 0; }
 
   // Fires the SYNC events and watchdog expiries due now (clock time) and recomputes the
   // next-event bound. Call at next_event_bound_ns(); process() calls it too when the bound is
@@ -157,7 +172,12 @@ class Segment {
   const Clock& clock_;
   SegmentOptions options_;
   std::vector<std::unique_ptr<Slave>> slaves_;
-  size_t firmware_pending_ = 0;     // slaves 0..n-1 of the last frame, firmware not run yet
+  // Firmware work the frames left (after_frame, run_firmware_slice): slaves 0..round_span_-1,
+  // round_left_ of them still to run this round, the next one at cursor_.
+  size_t round_span_ = 0;
+  size_t round_left_ = 0;
+  size_t cursor_ = 0;
+  bool deferred_firmware_ = false;
   uint64_t next_event_bound_ = 0;   // <= every slave's next timer event (0: walk at once)
   std::vector<PassTimes> offsets_;  // per slave, relative to the frame's arrival at slave 0
   FrameLayout layout_;

@@ -32,6 +32,32 @@ void BM_CyclicLrwFrmw(benchmark::State& state) {
 }
 BENCHMARK(BM_CyclicLrwFrmw)->Arg(1)->Arg(16)->Arg(128)->Unit(benchmark::kNanosecond);
 
+// The reply path alone, as the event loop runs it (deferred firmware, ecat/segment.hpp):
+// what the master's cyclic LRW + FRMW waits for between receive and send when the slaves'
+// firmware runs between frames. The firmware work is left pending (never run here), so each
+// ESC sees its SM2 written and SM3 read every frame without a new buffer from the firmware.
+void BM_CyclicLrwReplyPath(benchmark::State& state) {
+  const auto n = static_cast<size_t>(state.range(0));
+  Line line(n, {}, &SteadyClock::instance());
+  line.to_op();
+  line.segment->set_deferred_firmware(true);
+  FrameBuilder b;
+  b.add_logical(Command::Lrw, 0, std::vector<uint8_t>(n * (kOutputBytes + kInputBytes), 0x5A));
+  b.add(Command::Frmw, Line::station(0), 0x0910, std::vector<uint8_t>(8, 0));
+  const std::vector<uint8_t> frame = b.build();
+  std::vector<uint8_t> work = frame;
+  for (auto _ : state) {
+    std::memcpy(work.data(), frame.data(), frame.size());
+    benchmark::DoNotOptimize(line.segment->process(work));
+  }
+  const uint16_t wkc = static_cast<uint16_t>(work[16 + 10 + n * 10] | work[16 + 11 + n * 10] << 8);
+  if (wkc != 3 * n) state.SkipWithError("unexpected LRW working counter");
+  state.counters["ns_per_slave"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(n),
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_CyclicLrwReplyPath)->Arg(1)->Arg(16)->Arg(128)->Arg(199)->Unit(benchmark::kNanosecond);
+
 // One slave's outputs in a line of N in OP (an LWR that only the first slave's output FMMU
 // meets): what every other ESC spends on a logical datagram that is not theirs.
 void BM_LwrOneSlaveOfMany(benchmark::State& state) {

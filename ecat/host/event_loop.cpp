@@ -116,12 +116,48 @@ void EventLoop::handle_frame(std::span<uint8_t> frame) {
   if (options_.pcap != nullptr) options_.pcap->write(frame);
   if (!on_frame_) return;
   const size_t reply = on_frame_(frame);
+  // The yield window starts before the send: sending on a veth wakes the master in the
+  // same system call, and the scheduler may run it before this thread returns - a clock read
+  // after the send could then be later than the master's next frame.
+  if (after_frame_) frame_done_ns_ = monotonic_ns();
   if (reply != 0 && reply <= frame.size()) {
     const auto out = frame.first(reply);
     link_.send(out);
     if (options_.pcap != nullptr) options_.pcap->write(out);
   }
-  if (after_frame_) after_frame_();
+  if (after_frame_) {
+    work_done_ns_ = 0;
+    run_slice();
+  }
+}
+
+void EventLoop::run_slice() {
+  const uint64_t start = monotonic_ns();
+  work_left_ = after_frame_();
+  work_done_ns_ += monotonic_ns() - start;
+}
+
+bool EventLoop::work_slice() {
+  // A frame that is waiting may overtake the work once the work has had its minimum share
+  // (work_before_yield_ns of slices since the last reply: a short round is always finished
+  // first) and only within the yield window; its reply is followed by a slice of its own.
+  // Otherwise the work is finished before the socket is looked at again. The window is
+  // checked on both sides of the receive: a thread descheduled in between finds a frame that
+  // may have come much later, and finishes the work before it answers that frame.
+  if (work_done_ns_ >= options_.work_before_yield_ns &&
+      monotonic_ns() - frame_done_ns_ < options_.yield_window_ns) {
+    const auto frame = link_.try_receive();
+    if (!frame.empty()) {
+      if (monotonic_ns() - frame_done_ns_ >= options_.yield_window_ns) {
+        while (after_frame_()) {
+        }
+      }
+      handle_frame(frame);
+      return true;
+    }
+  }
+  run_slice();
+  return false;
 }
 
 void EventLoop::fire_timers(uint64_t now) {
@@ -156,6 +192,12 @@ int EventLoop::run_blocking() {
   while (!stop_requested_.load(std::memory_order_acquire)) {
     uint64_t now = monotonic_ns();
     fire_timers(now);
+    if (work_left_) {
+      if (work_slice() && spin_ns != 0) spin_until = monotonic_ns() + spin_ns;
+      if (posted_pending_.load(std::memory_order_acquire)) run_posted();
+      if (g_stop_signal.load(std::memory_order_relaxed) != 0 && take_stop_signal()) break;
+      continue;
+    }
     if (now < spin_until) {
       // The bounded window after a frame: non-blocking receives, posts and signals checked
       // between them, timers above; then back to sleeping in ppoll.
@@ -210,8 +252,9 @@ int EventLoop::run_busy_poll() {
   uint64_t now = monotonic_ns();
   uint64_t deadline = timers_ != nullptr ? timers_->next_deadline_ns() : TimerSource::kNever;
   while (!stop_requested_.load(std::memory_order_acquire)) {
-    const auto frame = link_.try_receive();
-    if (!frame.empty()) {
+    if (work_left_) {
+      if (work_slice() && timers_ != nullptr) deadline = timers_->next_deadline_ns();
+    } else if (const auto frame = link_.try_receive(); !frame.empty()) {
       handle_frame(frame);
       // A frame may have programmed new SYNC times or kicked a watchdog.
       if (timers_ != nullptr) deadline = timers_->next_deadline_ns();

@@ -17,6 +17,14 @@
 // on its CPU - the delivery of the very frames it waits for - and ethercrab with 16 slaves lost
 // a PDU after 30 ms in about half of its runs that way (base/real_time.hpp).
 //
+// After-frame work (set_after_frame_work) runs in slices after the reply; between slices - once
+// the work has had Options::work_before_yield_ns and for Options::yield_window_ns after the
+// reply - the loop takes a frame that is waiting (a
+// non-blocking receive, about 0.4 µs when none is), so a master sending back to back waits for
+// one slice at most, not for all the work of its previous frame. A frame found later than that
+// (a master with a real cycle time, or the loop thread was descheduled) waits for the work to
+// finish, exactly as before slices existed.
+//
 // Signals: a SIGINT/SIGTERM handler (SA_RESTART) records the signal and wakes the loop through
 // its eventfd. Whichever thread the kernel picks to run it, the process is not killed, so
 // threads started before the loop (with any signal mask) are harmless.
@@ -67,6 +75,15 @@ class EventLoop {
     // Blocking mode: after a frame, poll without sleeping this long for the next (0 = off).
     // Not used on a real-time thread (spin_window_ns()).
     uint64_t spin_after_frame_ns = 100'000;
+    // After-frame work yields to a waiting frame only this long after the last reply was
+    // sent (see set_after_frame_work): a master sending back to back. A frame found later
+    // (a master with a longer cycle, or this thread was descheduled) is answered once the work
+    // is done, so at cycle times above the window every slave's inputs are as fresh as before.
+    uint64_t yield_window_ns = 50'000;
+    // ... and only once the work has run this long since the last reply: a round of work
+    // shorter than this (16 tiny racks: about 12 µs) is always finished before the next frame
+    // is answered, at any frame rate.
+    uint64_t work_before_yield_ns = 20'000;
   };
 
   // Installs the SIGINT/SIGTERM handler. From then on such a signal no longer kills the
@@ -81,8 +98,16 @@ class EventLoop {
   EventLoop& operator=(const EventLoop&) = delete;
 
   void set_frame_handler(FrameHandler handler) { on_frame_ = std::move(handler); }
-  // Runs after each frame's reply has been sent (the slaves' firmware: Segment::after_frame).
-  void set_after_frame_handler(std::function<void()> handler) { after_frame_ = std::move(handler); }
+  // Work a frame leaves for after its reply has been sent (the slaves' firmware:
+  // Segment::run_firmware_slice), done in bounded slices: one slice right after each reply,
+  // then - while the handler returns true (more to do) - a frame waiting in the socket is
+  // answered before the next slice, once the work has run Options::work_before_yield_ns and
+  // as long as the frame is found within Options::yield_window_ns of the last reply;
+  // otherwise the work is finished first. Every frame is followed by at
+  // least one slice, so the work progresses at any frame rate; the loop sleeps only once the
+  // work is done.
+  using WorkSlice = std::function<bool()>;
+  void set_after_frame_work(WorkSlice slice) { after_frame_ = std::move(slice); }
   void set_timer_source(TimerSource* source) { timers_ = source; }
 
   // Runs until stop() or SIGINT/SIGTERM. Returns 0 on a clean stop, 1 when the loop could
@@ -103,6 +128,10 @@ class EventLoop {
 
  private:
   void handle_frame(std::span<uint8_t> frame);
+  // One step of pending after-frame work: a waiting frame (true; only within the yield
+  // window after the last frame), else one slice (false).
+  bool work_slice();
+  void run_slice();  // one call of after_frame_, its time added to work_done_ns_
   void run_posted();
   bool take_stop_signal();  // true when a stop signal arrived (and records it)
   void fire_timers(uint64_t now);
@@ -112,7 +141,10 @@ class EventLoop {
   RawSocketLink& link_;
   Options options_;
   FrameHandler on_frame_;
-  std::function<void()> after_frame_;
+  WorkSlice after_frame_;
+  bool work_left_ = false;      // after_frame_ returned true: run it again before sleeping
+  uint64_t frame_done_ns_ = 0;  // when the last frame's reply was sent (the yield window)
+  uint64_t work_done_ns_ = 0;   // time in after-frame work since then
   TimerSource* timers_ = nullptr;
   int event_fd_ = -1;
   std::atomic<bool> stop_requested_{false};

@@ -191,6 +191,100 @@ TEST_P(LinkEventLoop, StopBeforeRunIsNotLost) {
   EXPECT_EQ(loop.run(), 0);
 }
 
+// After-frame work in slices (set_after_frame_work): the first frame leaves work that never
+// ends by itself (capped at 5 s of slices); a second frame sent once the first reply is back is
+// answered while that work is still pending (a yield window longer than the test), and every
+// frame is followed by a slice.
+TEST_P(LinkEventLoop, AfterFrameWorkYieldsToAWaitingFrame) {
+  RawSocketLink link("lo");
+  EventLoop loop(link, {.wait = GetParam(),
+                        .pcap = nullptr,
+                        .stop_on_signals = false,
+                        .yield_window_ns = 60'000'000'000ull});
+  constexpr int kCap = 50'000;  // x 100 µs
+  std::atomic<int> slices{0};
+  std::atomic<int> slices_at_second{-1};
+  std::atomic<bool> second_answered{false};
+  loop.set_frame_handler([&](std::span<uint8_t> frame) {
+    const size_t n = answer(frame);
+    if (n != 0 && frame[testutil::kFirstDataByte] == 0x31) {
+      slices_at_second.store(slices.load());
+      second_answered.store(true);
+    }
+    return n;
+  });
+  loop.set_after_frame_work([&] {
+    const int k = slices.fetch_add(1) + 1;
+    if (second_answered.load()) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+    return k < kCap;
+  });
+  std::atomic<int> replies{0};
+  std::thread master([&] {
+    RawSocketLink master_link("lo");
+    for (uint8_t tag : {0x20, 0x30}) {
+      auto frame = testutil::ethercat_frame(tag);
+      stamp(frame);
+      master_link.send(frame);
+      const auto reply = testutil::receive_matching(master_link, [tag](std::span<const uint8_t> f) {
+        return ours(f) && (f[6] & 0x02) && f[testutil::kFirstDataByte] == tag + 1;
+      });
+      if (!reply.empty()) replies.fetch_add(1);
+    }
+    loop.post([&] { loop.stop(); });
+  });
+  EXPECT_EQ(loop.run(), 0);
+  master.join();
+  EXPECT_EQ(replies.load(), 2);
+  // Frame 1's work had begun (at least its first slice) and was not finished when frame 2 came.
+  EXPECT_GE(slices_at_second.load(), 1);
+  EXPECT_LT(slices_at_second.load(), kCap);
+  // Frame 2 was followed by a slice of its own (which found the work done).
+  EXPECT_GT(slices.load(), slices_at_second.load());
+}
+
+// Outside the yield window (0 here: always outside) the work of the first frame is finished
+// before the second frame is taken, however early it arrives: 20 slices of 100 µs, then frame 2.
+TEST_P(LinkEventLoop, AfterFrameWorkOutsideTheYieldWindowFinishesFirst) {
+  RawSocketLink link("lo");
+  EventLoop loop(
+      link, {.wait = GetParam(), .pcap = nullptr, .stop_on_signals = false, .yield_window_ns = 0});
+  constexpr int kSlices = 20;
+  std::atomic<int> slices{0};
+  std::atomic<int> slices_at_second{-1};
+  loop.set_frame_handler([&](std::span<uint8_t> frame) {
+    const size_t n = answer(frame);
+    if (n != 0 && frame[testutil::kFirstDataByte] == 0x41) slices_at_second.store(slices.load());
+    return n;
+  });
+  loop.set_after_frame_work([&] {
+    if (slices_at_second.load() >= 0) return false;  // frame 2's slice: nothing left
+    const int k = slices.fetch_add(1) + 1;
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+    return k < kSlices;
+  });
+  std::atomic<int> replies{0};
+  std::thread master([&] {
+    RawSocketLink master_link("lo");
+    for (uint8_t tag : {0x30, 0x40}) {
+      auto frame = testutil::ethercat_frame(tag);
+      stamp(frame);
+      master_link.send(frame);
+      const auto reply = testutil::receive_matching(master_link, [tag](std::span<const uint8_t> f) {
+        return ours(f) && (f[6] & 0x02) && f[testutil::kFirstDataByte] == tag + 1;
+      });
+      if (!reply.empty()) replies.fetch_add(1);
+    }
+    loop.post([&] { loop.stop(); });
+  });
+  EXPECT_EQ(loop.run(), 0);
+  master.join();
+  EXPECT_EQ(replies.load(), 2);
+  // (On lo the loop also receives its own first reply, which it does not answer but follows
+  // with a slice too: at least kSlices.)
+  EXPECT_GE(slices_at_second.load(), kSlices);
+}
+
 // Under chrt -f the loop must not poll after a frame: a SCHED_FIFO thread that never sleeps
 // starves the softirq work that delivers the next frame (ethercrab with 16 slaves lost PDUs
 // after 30 ms in about half of its runs). At normal priority the window stays.
