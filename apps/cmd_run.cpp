@@ -1,7 +1,7 @@
 // `rackcat run`: the emulated rack(s) on a network interface, answering a real master.
 //
 //   rackcat run --iface IFACE [--config FILE] [--slaves N | --line FILE | --eni FILE --esi-dir DIR]
-//               [--busy-poll] [--pcap FILE]
+//               [--busy-poll] [--firmware-yield-us N] [--pcap FILE]
 //               [--state-dir DIR] [--control-port P] [--user USER] [--rim-bus can:IFACE]
 //               [--pdi direct|lan9252-emulated]
 //
@@ -58,6 +58,7 @@ struct RunArgs {
   std::string config;
   int slaves = 1;
   bool busy_poll = false;
+  uint32_t firmware_yield_us = 0;
   std::string pcap;
   std::string state_dir;
   int control_port = modules::kDefaultControlPort;
@@ -102,7 +103,8 @@ int run(const RunArgs& a) {
                        .wait = a.busy_poll ? ecat::WaitMode::BusyPoll : ecat::WaitMode::Blocking,
                        .pcap_path = a.pcap,
                        .drop_privileges = true,
-                       .user = a.user});
+                       .user = a.user,
+                       .firmware_yield_window_ns = a.firmware_yield_us * 1'000ull});
   if (const int rc = runner.open("rackcat"); rc != 0) return rc;
 
   // From here on everything runs as the unprivileged user: the state directory and the files
@@ -351,6 +353,12 @@ void add_run(CLI::App& app) {
   eni->excludes(config);
   eni->excludes(line);
   cmd->add_flag("--busy-poll", args->busy_poll, "spin on the socket instead of blocking");
+  cmd->add_option(
+         "--firmware-yield-us", args->firmware_yield_us,
+         "let a frame that comes within this many us of the previous reply be answered "
+         "before the slaves' firmware has finished the previous frame's work (back-to-back "
+         "masters: lower latency, inputs up to one firmware round old); 0 = off")
+      ->check(CLI::Range(0, 1000));
   cmd->add_option("--pcap", args->pcap, "record every frame in and out to this pcap file");
   cmd->add_option("--state-dir", args->state_dir,
                   "where stored parameters live (default $XDG_STATE_HOME/rackcat)");

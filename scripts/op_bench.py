@@ -23,7 +23,7 @@ answering a BRD (working counter = slave count), with RSS and thread count once 
 
     sudo scripts/op_bench.py [--build-dir build] [--slaves 1,16,64,128,256]
         [--modes blocking,busy-poll] [--samples 10000] [--sdo-calls 2000]
-        [--brd-slaves 64,128,256,4096]
+        [--brd-slaves 64,128,256,4096] [--firmware-yield-us N]
 
 Prints one table; --json FILE also writes the numbers.
 """
@@ -136,6 +136,8 @@ class Rackcat(wb.Responder):
             cmd += ["--config", str(args.config)]
         if busy:
             cmd.append("--busy-poll")
+        if args.firmware_yield_us:
+            cmd += ["--firmware-yield-us", str(args.firmware_yield_us)]
         super().__init__(name, cmd, tmp)
 
 
@@ -301,6 +303,8 @@ def main():
     ap.add_argument("--idle-seconds", type=float, default=5)
     ap.add_argument("--brd-slaves", default="64,128,256,4096",
                     help="slave counts for the start-up BRD / RSS / thread count run ('' = skip)")
+    ap.add_argument("--firmware-yield-us", type=int, default=0,
+                    help="rackcat run --firmware-yield-us (0 = off, rackcat's default)")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     if os.geteuid() != 0:

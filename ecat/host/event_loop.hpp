@@ -79,7 +79,8 @@ class EventLoop {
     // sent (see set_after_frame_work): a master sending back to back. A frame found later
     // (a master with a longer cycle, or this thread was descheduled) is answered once the work
     // is done, so at cycle times above the window every slave's inputs are as fresh as before.
-    uint64_t yield_window_ns = 50'000;
+    // 0 (the default): never; every frame's work is finished before the next frame.
+    uint64_t yield_window_ns = 0;
     // ... and only once the work has run this long since the last reply: a round of work
     // shorter than this (16 tiny racks: about 12 µs) is always finished before the next frame
     // is answered, at any frame rate.

@@ -55,8 +55,10 @@ int Runner::open(const char* program, FILE* err) {
   if (pcap_) pcap_->start();
   try {
     loop_ = std::make_unique<EventLoop>(
-        *link_,
-        EventLoop::Options{.wait = options_.wait, .pcap = pcap_.get(), .stop_on_signals = true});
+        *link_, EventLoop::Options{.wait = options_.wait,
+                                   .pcap = pcap_.get(),
+                                   .stop_on_signals = true,
+                                   .yield_window_ns = options_.firmware_yield_window_ns});
   } catch (const std::exception& e) {
     std::fprintf(err, "%s: %s\n", program, e.what());
     return kExitFailure;

@@ -36,6 +36,11 @@ struct RunnerOptions {
   // (debugging only).
   bool drop_privileges = true;
   std::string user;
+  // EventLoop::Options::yield_window_ns for the slaves' firmware: 0 (default) finishes every
+  // frame's firmware work before the next frame is answered; > 0 lets a frame that comes that
+  // soon after the previous reply overtake it (lower latency for a master sending back to back;
+  // a slave's inputs can then be a firmware round older: docs/PERFORMANCE.md, session 7).
+  uint64_t firmware_yield_window_ns = 0;
 };
 
 // Exit codes shared with the CLI (apps/commands.hpp): 2 = the environment or the arguments
