@@ -70,9 +70,19 @@ int Runner::run(Segment& segment) {
   if (!loop_) return kExitFailure;
   SegmentTimers timers(segment);
   loop_->set_frame_handler([&segment](std::span<uint8_t> frame) { return segment.process(frame); });
-  // The firmware runs in slices of about kFirmwareSliceNs between frames (event_loop.hpp).
   segment.set_deferred_firmware(true);
-  loop_->set_after_frame_work([&segment] { return segment.run_firmware_slice(kFirmwareSliceNs); });
+  if (options_.firmware_yield_window_ns == 0) {
+    // No frame may overtake the firmware (the default): the whole round runs after the reply,
+    // without the slices' clock read per slave - they exist only to look for a waiting frame.
+    loop_->set_after_frame_work([&segment] {
+      segment.after_frame();
+      return false;
+    });
+  } else {
+    // The firmware runs in slices of about kFirmwareSliceNs between frames (event_loop.hpp).
+    loop_->set_after_frame_work(
+        [&segment] { return segment.run_firmware_slice(kFirmwareSliceNs); });
+  }
   loop_->set_timer_source(&timers);
   const int rc = loop_->run();
   loop_->set_timer_source(nullptr);
