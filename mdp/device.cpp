@@ -5,9 +5,13 @@
 
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
+#include <utility>
 
 #include "coe/bits.hpp"
 #include "coe/process_image.hpp"
@@ -52,6 +56,15 @@ constexpr uint16_t kAlInvalidInputConfig = 0x001E;
 }  // namespace
 
 struct Device::Impl final : DeviceRuntime {
+  Impl() = default;
+  // A reset job queued on the worker writes reset_firmware (a member destroyed before the
+  // writer): finish every queued job before any member goes (shutdown only, not the device
+  // thread's cycle).
+  ~Impl() override {
+    if (writer) writer->wait_idle();
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
   Device* self = nullptr;
   RackConfig config;
   coe::ObjectDictionary od;
@@ -59,6 +72,7 @@ struct Device::Impl final : DeviceRuntime {
   std::unique_ptr<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
   std::unique_ptr<ParameterSet> params;
   std::shared_ptr<StateDirectory> dir;
+  base::BackgroundWorker* worker = nullptr;  // the file work's (DeviceOptions::worker)
   std::unique_ptr<ParameterStore> store;
   std::unique_ptr<ParameterWriter> writer;  // after `store`: destroyed (and flushed) first
   std::unique_ptr<FirmwareStore> firmware;
@@ -134,43 +148,71 @@ struct Device::Impl final : DeviceRuntime {
   }
 
   // Finishes the commands whose file work the worker has done (ESC thread; called before a
-  // command object is read and whenever the mailbox is idle).
+  // command object is read and whenever the mailbox is idle): every finished result, in the
+  // order the worker finished them (a restore saved before a reset read the file back is
+  // applied before the reset).
   void complete_jobs() {
     if (!writer->has_results()) return;
     using Job = ParameterWriter::Job;
-    if (auto r = writer->take(Job::Store)) {
-      if (!r->ok) load_report = r->report;
-      complete_command(od, 0xFBF2, r->ok ? cmd::kStatusDoneNoResponse : cmd::kStatusError);
+    std::array<std::pair<Job, std::optional<ParameterWriter::Result>>, ParameterWriter::kJobs> done;
+    for (size_t i = 0; i < done.size(); ++i) {
+      const auto job = static_cast<Job>(i);
+      done[i] = {job, writer->take(job)};
     }
-    if (auto r = writer->take(Job::Checksum)) {
-      complete_command(od, 0xFBF3, r->ok ? cmd::kStatusDoneWithResponse : cmd::kStatusError,
-                       r->bytes);
+    std::sort(done.begin(), done.end(), [](const auto& a, const auto& b) {
+      const uint64_t sa = a.second ? a.second->sequence : UINT64_MAX;
+      const uint64_t sb = b.second ? b.second->sequence : UINT64_MAX;
+      return sa < sb;
+    });
+    for (auto& [job, r] : done) {
+      if (r) complete(job, std::move(*r));
     }
-    if (auto r = writer->take(Job::Load)) {
-      std::string why = r->ok ? refuse(r->stored ? r->bytes : default_payload) : r->report;
-      load_report = why.empty() ? r->report : why;
-      if (!why.empty()) {
-        complete_command(od, 0xFBF4, cmd::kStatusError);
-      } else {
-        params->apply(r->stored ? r->bytes : default_payload);
-        image->compile();
-        complete_command(od, 0xFBF4, cmd::kStatusDoneNoResponse);
-        notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
+  }
+
+  void complete(ParameterWriter::Job job, ParameterWriter::Result r) {
+    using Job = ParameterWriter::Job;
+    switch (job) {
+      case Job::Store:
+        if (!r.ok) load_report = r.report;
+        complete_command(od, 0xFBF2, r.ok ? cmd::kStatusDoneNoResponse : cmd::kStatusError);
+        break;
+      case Job::Checksum:
+        complete_command(od, 0xFBF3, r.ok ? cmd::kStatusDoneWithResponse : cmd::kStatusError,
+                         r.bytes);
+        break;
+      case Job::Load: {
+        std::string why = r.ok ? refuse(r.stored ? r.bytes : default_payload) : r.report;
+        load_report = why.empty() ? r.report : why;
+        if (!why.empty()) {
+          complete_command(od, 0xFBF4, cmd::kStatusError);
+        } else {
+          params->apply(r.stored ? r.bytes : default_payload);
+          image->compile();
+          complete_command(od, 0xFBF4, cmd::kStatusDoneNoResponse);
+          notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
+        }
+        break;
       }
-    }
-    if (auto r = writer->take(Job::Reset)) {
-      if (!r->ok) {
-        load_report = r->report;
-        complete_command(od, 0xFBF0, cmd::kStatusError);
-      } else {
-        // The reset restarts the firmware: a container installed since power-on runs now (read
-        // and verified by the worker with the reset job).
-        apply_firmware(std::move(reset_firmware));
-        apply_firmware_version(od, config.control);
-        power_on_reset(*r);  // every object, 0xFBF0 included, back to power-on values
-        notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
-        notify([&](CycleListener& l) { l.on_device_reset(*self, reset_factory); });
-      }
+      case Job::Reset:
+        if (!r.ok) {
+          load_report = r.report;
+          complete_command(od, 0xFBF0, cmd::kStatusError);
+        } else {
+          // The reset restarts the firmware: a container installed since power-on runs now
+          // (read and verified by the worker with the reset job).
+          apply_firmware(std::move(reset_firmware));
+          apply_firmware_version(od, config.control);
+          power_on_reset(r);  // every object, 0xFBF0 included, back to power-on values
+          notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
+          notify([&](CycleListener& l) { l.on_device_reset(*self, reset_factory); });
+        }
+        break;
+      case Job::ReadFile:
+        if (parameter_read_awaited) parameter_read = std::move(r);  // else: abandoned
+        break;
+      case Job::Restore:
+        finish_restore(r);
+        break;
     }
   }
 
@@ -230,7 +272,7 @@ struct Device::Impl final : DeviceRuntime {
   // At power-on: the installed firmware container, if valid, sets the version objects and the
   // SII revision; else the built-in version runs (as a container with an empty payload).
   void load_firmware() {
-    firmware = std::make_unique<FirmwareStore>(dir);
+    firmware = std::make_unique<FirmwareStore>(dir, *worker);
     const auto& cm = config.control;
     built_in_firmware = {cm.vendor_id, cm.product_code, cm.revision, cm.software_version,
                          cm.firmware_version.substr(0, kFirmwareShortVersionMax)};
@@ -284,20 +326,47 @@ struct Device::Impl final : DeviceRuntime {
     firmware_report += "firmware " + cm.software_version + " (built in)";
   }
 
-  std::vector<uint8_t> parameter_file() {
-    writer->wait_idle();
+  // --- parameters.bin over FoE (file_access.hpp, docs/FOE.md) ------------------------------
+  // The file work is a job of the parameter writer, so it runs on the worker after any store
+  // (0xFBF2), load or reset queued before it, in that order, and never on this thread. The
+  // jobs own their data (no pointer to this device); the objects change only here, when the
+  // result is taken (complete_jobs).
+  bool parameter_read_awaited = false;
+  std::optional<ParameterWriter::Result> parameter_read;  // the worker's read, once it is done
+  bool restore_pending = false;                           // a restore's save is queued/running
+  std::vector<uint8_t> restore_payload;                   // ... and the set it applies when saved
+  foe::CommitProgress restore_outcome;
+  std::string restore_detail;
+
+  void start_parameter_read() {
+    parameter_read.reset();
+    parameter_read_awaited = true;
+    writer->submit_read_file(params->fingerprint());
+  }
+
+  foe::ReadProgress poll_parameter_read(std::vector<uint8_t>& contents) {
+    complete_jobs();
+    if (!parameter_read_awaited) return {false, foe::FoeError::NotDefined};
+    if (!parameter_read) return {true, foe::FoeError::None};
     // The parameters as stored (what 0xFBF3 hashes): the stored file if it is valid, else the
     // shipped defaults.
-    std::vector<uint8_t> payload;
-    std::string detail;
-    if (store->load(params->fingerprint(), payload, detail) != ParameterStore::LoadResult::Loaded ||
-        !refuse(payload).empty()) {
-      payload = default_payload;
-    }
-    return ParameterStore::encode(params->fingerprint(), payload);
+    const ParameterWriter::Result& r = *parameter_read;
+    const bool valid = r.stored && refuse(r.bytes).empty();
+    contents = ParameterStore::encode(params->fingerprint(), valid ? r.bytes : default_payload);
+    abort_parameter_read();
+    return {false, foe::FoeError::None};
+  }
+
+  void abort_parameter_read() {
+    parameter_read_awaited = false;
+    parameter_read.reset();
   }
 
   foe::FoeError restore_parameters(std::span<const uint8_t> file, std::string& detail) {
+    if (restore_pending) {
+      detail = "a parameter restore is still running";
+      return foe::FoeError::AccessDenied;
+    }
     std::vector<uint8_t> payload;
     switch (ParameterStore::decode(file, params->fingerprint(), payload, detail, "over FoE")) {
       case ParameterStore::LoadResult::Loaded:
@@ -312,26 +381,53 @@ struct Device::Impl final : DeviceRuntime {
       detail = "parameter file over FoE: " + why;
       return foe::FoeError::Illegal;
     }
-    writer->wait_idle();
-    std::string error;
-    if (!store->save(params->fingerprint(), payload, error)) {
-      detail = error;
-      return foe::FoeError::FlashProblem;
-    }
-    params->apply(payload);
-    image->compile();
-    notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
-    detail = "restored parameters over FoE";
+    restore_payload = payload;
+    restore_pending = true;
+    writer->submit_restore(params->fingerprint(), std::move(payload));
+    detail.clear();
     return foe::FoeError::None;
+  }
+
+  // The worker saved the restored set (or failed to): apply it, or keep the old one.
+  void finish_restore(const ParameterWriter::Result& r) {
+    restore_pending = false;
+    if (r.ok) {
+      params->apply(restore_payload);
+      image->compile();
+      notify([&](CycleListener& l) { l.on_parameters_loaded(*self); });
+      restore_outcome = {false, foe::FoeError::None, 1, 1};
+      restore_detail = "restored parameters";
+    } else {
+      // ETG.1000.6 §5.8 FoE error codes: 0x8003 Disk full for a full disk (or quota, or file
+      // size limit), 0x8011 Flash problem for any other failure to write the state directory.
+      const int e = r.error_number;
+      const bool full = e == ENOSPC || e == EDQUOT || e == EFBIG;
+      restore_outcome = {false, full ? foe::FoeError::DiskFull : foe::FoeError::FlashProblem, 1, 1};
+      restore_detail = "parameters not restored, the old ones stay: " + r.report;
+    }
+    restore_payload = {};
+  }
+
+  foe::CommitProgress poll_restore(std::string& detail) {
+    complete_jobs();
+    // Done / Entire: one step (the save), 0 of 1 while it runs.
+    if (restore_pending) return {true, foe::FoeError::None, 0, 1};
+    detail = restore_detail;
+    return restore_outcome;
   }
 
   void start_foe(uint32_t password) {
     FileAccessHooks hooks;
     hooks.state = [this] { return state; };
-    hooks.parameter_file = [this] { return parameter_file(); };
+    hooks.start_parameter_read = [this] { start_parameter_read(); };
+    hooks.poll_parameter_read = [this](std::vector<uint8_t>& contents) {
+      return poll_parameter_read(contents);
+    };
+    hooks.abort_parameter_read = [this] { abort_parameter_read(); };
     hooks.restore_parameters = [this](std::span<const uint8_t> f, std::string& detail) {
       return restore_parameters(f, detail);
     };
+    hooks.poll_restore = [this](std::string& detail) { return poll_restore(detail); };
     hooks.running_firmware = [this] { return running_firmware; };
     const uint32_t vendor = config.control.vendor_id, product = config.control.product_code;
     hooks.verify_firmware = [vendor, product](std::span<const uint8_t> f, std::string& detail) {
@@ -357,6 +453,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
                         : StateDirectory::open(options.state_dir.empty() ? default_state_dir()
                                                                          : options.state_dir);
   d.state_dir = d.dir->path();
+  d.worker = options.worker != nullptr ? options.worker : &base::BackgroundWorker::shared();
   d.load_firmware();  // before the dictionary: the firmware's version is what it reports
   build_object_dictionary(d.config, d.od);
   d.input_latch_local = d.od.find(0xF6F0);
@@ -364,7 +461,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.params = std::make_unique<ParameterSet>(d.od, d.config);
   d.default_payload = d.params->capture();
   d.store = std::make_unique<ParameterStore>(d.dir);
-  d.writer = std::make_unique<ParameterWriter>(*d.store);
+  d.writer = std::make_unique<ParameterWriter>(*d.store, *d.worker);
   d.image = std::make_unique<coe::ProcessImage>(d.od);
   attach_device_behaviour(d.config, d.od, d);
   d.history.bind(*d.od.find(coe::diag::kIndex));
@@ -415,8 +512,9 @@ mailbox::Answer Device::foe_request(std::span<const uint8_t> request, size_t cap
   return {r.length, mailbox::Error::None};
 }
 
-void Device::foe_poll() {
-  impl_->foe->tick();
+size_t Device::foe_poll(std::span<uint8_t> reply) {
+  impl_->complete_jobs();
+  return impl_->foe->poll(reply);
 }
 
 bool Device::raise_emergency(uint16_t error_code, uint8_t error_register,

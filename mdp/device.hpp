@@ -15,6 +15,7 @@
 #include <span>
 #include <string>
 
+#include "base/background_worker.hpp"
 #include "base/mailbox_error.hpp"
 #include "coe/access.hpp"
 #include "coe/diagnosis_history.hpp"
@@ -66,6 +67,9 @@ struct DeviceOptions {
   // Load the stored parameter file at construction (a corrupt or foreign file is reported
   // through load_report() and ignored).
   bool load_stored_parameters = true;
+  // Where the file work of the command objects and of the FoE files runs (one queue per
+  // device, in order): nullptr = the process-wide base::BackgroundWorker::shared().
+  base::BackgroundWorker* worker = nullptr;
 };
 
 // $XDG_STATE_HOME/rackcat, else $HOME/.local/state/rackcat.
@@ -100,9 +104,10 @@ class Device {
   // last-packet rule of writes.
   mailbox::Answer foe_request(std::span<const uint8_t> request, size_t capacity,
                               std::span<uint8_t> reply);
-  // Drops an FoE transfer idle past its timeout and drives a finished commit to its end;
-  // call whenever the mailbox is idle.
-  void foe_poll();
+  // Drops an FoE transfer idle past its timeout, drives a finished commit to its end, and
+  // sends the deferred first Data of a parameters.bin read once the worker has read the file
+  // (its length; 0 = nothing to send). `reply` as for foe_request. Call whenever SM1 is free.
+  size_t foe_poll(std::span<uint8_t> reply);
   // Whether coe_poll() or foe_poll() has work: an Emergency or SDO Information fragment
   // queued, a command's file work finished on the worker, a FoE transfer open (its timeout).
   // The firmware runs without an ESC event only then (ecat::Application::mailbox_pending).

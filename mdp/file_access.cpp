@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <string>
 
 namespace rackcat::mdp {
 
@@ -41,6 +42,7 @@ FoeError FileAccess::refuse(FoeError e, const std::string& why) {
 
 foe::ReadProgress FileAccess::read_file(std::string_view name, uint32_t password, size_t max_size,
                                         std::vector<uint8_t>& contents) {
+  abort_read();
   const EsmState state = hooks_.state();
   const bool firmware = is_firmware_file_name(name);
   if (!firmware && name != kParameterFileName) {
@@ -51,19 +53,42 @@ foe::ReadProgress FileAccess::read_file(std::string_view name, uint32_t password
     if (state != EsmState::Boot) {
       return {false, refuse(FoeError::BootstrapOnly, "firmware is read in BOOT only")};
     }
-    contents = hooks_.running_firmware();
-  } else {
-    if (state == EsmState::Boot) {
-      return {false, refuse(FoeError::NotBootstrap, "parameters are not served in BOOT")};
-    }
-    contents = hooks_.parameter_file();
+    contents = hooks_.running_firmware();  // in memory since power-on
+    if (contents.size() > max_size)
+      return {false, refuse(FoeError::DiskFull, "file larger than FoE allows")};
+    return {false, FoeError::None};
   }
-  if (contents.size() > max_size)
+  if (state == EsmState::Boot) {
+    return {false, refuse(FoeError::NotBootstrap, "parameters are not served in BOOT")};
+  }
+  // The stored file is read on the worker: the reply waits (FoeServer::poll -> poll_read).
+  hooks_.start_parameter_read();
+  reading_parameters_ = true;
+  read_max_ = max_size;
+  return poll_read(contents);
+}
+
+foe::ReadProgress FileAccess::poll_read(std::vector<uint8_t>& contents) {
+  if (!reading_parameters_) return {false, FoeError::NotDefined};
+  const foe::ReadProgress p = hooks_.poll_parameter_read(contents);
+  if (p.busy) return p;
+  reading_parameters_ = false;
+  if (p.error != FoeError::None) return {false, refuse(p.error, "parameter file not read")};
+  if (contents.size() > read_max_)
     return {false, refuse(FoeError::DiskFull, "file larger than FoE allows")};
   return {false, FoeError::None};
 }
 
+void FileAccess::abort_read() {
+  if (!reading_parameters_) return;
+  reading_parameters_ = false;
+  hooks_.abort_parameter_read();
+}
+
 FoeError FileAccess::begin_write(std::string_view name, uint32_t password) {
+  if (restoring_ && poll_commit().busy) {
+    return refuse(FoeError::AccessDenied, "a parameter restore is still running");
+  }
   abort_write();
   const EsmState state = hooks_.state();
   const bool firmware = is_firmware_file_name(name);
@@ -117,18 +142,36 @@ CommitProgress FileAccess::commit() {
     return poll_commit();
   }
   if (target_ == Target::Parameters) {
+    // Checked here, on the device thread (a refusal changes nothing); saved on the worker.
     std::string detail;
     const FoeError e = hooks_.restore_parameters(parameters_, detail);
-    if (e != FoeError::None) refuse(e, detail);
-    parameters_.clear();
-    parameters_result_ = CommitProgress{false, e, 0, 0};
-    return parameters_result_;
+    parameters_ = {};
+    if (e != FoeError::None) {
+      refuse(e, detail);
+      parameters_result_ = CommitProgress{false, e, 0, 0};
+      return parameters_result_;
+    }
+    restoring_ = true;
+    return poll_commit();
   }
   return CommitProgress{false, FoeError::Illegal, 0, 0};
 }
 
 CommitProgress FileAccess::poll_commit() {
-  if (target_ == Target::Parameters) return parameters_result_;
+  if (target_ == Target::Parameters) {
+    if (!restoring_) return parameters_result_;
+    std::string detail;
+    const CommitProgress p = hooks_.poll_restore(detail);
+    if (p.busy) return p;
+    restoring_ = false;
+    if (p.error != FoeError::None) {
+      refuse(p.error, detail);
+    } else if (hooks_.log) {
+      hooks_.log("FoE: " + detail + " (" + std::to_string(received_) + " bytes)");
+    }
+    parameters_result_ = p;
+    return p;
+  }
   if (target_ != Target::Firmware) return CommitProgress{false, FoeError::Illegal, 0, 0};
   const FirmwareStore::Status s = store_.poll_commit();
   if (s.busy) {
@@ -149,7 +192,9 @@ CommitProgress FileAccess::poll_commit() {
 
 void FileAccess::abort_write() {
   if (target_ == Target::Firmware && !store_.poll_commit().busy) store_.abort();
-  parameters_.clear();
+  parameters_ = {};
+  // A restore handed over finishes on its own; poll_commit() still reports it.
+  if (restoring_) return;
   target_ = Target::None;
 }
 

@@ -47,8 +47,8 @@ std::vector<uint8_t> ParameterStore::encode(uint32_t fingerprint,
 }
 
 bool ParameterStore::save(uint32_t fingerprint, std::span<const uint8_t> payload,
-                          std::string& error) const {
-  return dir_->replace(kFileName, encode(fingerprint, payload), 0600, error);
+                          std::string& error, int* error_number) const {
+  return dir_->replace(kFileName, encode(fingerprint, payload), 0600, error, error_number);
 }
 
 ParameterStore::LoadResult ParameterStore::load(uint32_t fingerprint, std::vector<uint8_t>& payload,

@@ -34,7 +34,9 @@ class ParameterStore {
   const StateDirectory& directory() const { return *dir_; }
 
   // Replaces the file. False with `error` on failure; the previous file is then unchanged.
-  bool save(uint32_t fingerprint, std::span<const uint8_t> payload, std::string& error) const;
+  // `error_number`: as StateDirectory::replace (ENOSPC for a full disk...).
+  bool save(uint32_t fingerprint, std::span<const uint8_t> payload, std::string& error,
+            int* error_number = nullptr) const;
   // Reads and checks the file; `payload` is filled only for Loaded. `detail` says why not
   // (never quoting the file's content). A symlink, directory, FIFO or oversized file is Corrupt.
   LoadResult load(uint32_t fingerprint, std::vector<uint8_t>& payload, std::string& detail) const;

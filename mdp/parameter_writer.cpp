@@ -77,6 +77,19 @@ void ParameterWriter::submit_load(uint32_t fingerprint) {
   submit(Job::Load, std::move(r));
 }
 
+void ParameterWriter::submit_read_file(uint32_t fingerprint) {
+  Request r;
+  r.fingerprint = fingerprint;
+  submit(Job::ReadFile, std::move(r));
+}
+
+void ParameterWriter::submit_restore(uint32_t fingerprint, std::vector<uint8_t> payload) {
+  Request r;
+  r.fingerprint = fingerprint;
+  r.payload = std::move(payload);
+  submit(Job::Restore, std::move(r));
+}
+
 void ParameterWriter::submit_reset(uint32_t fingerprint, bool factory, std::function<void()> also) {
   Request r;
   r.fingerprint = fingerprint;
@@ -113,8 +126,15 @@ ParameterWriter::Result ParameterWriter::execute(Job job, const Request& r) cons
   Result out;
   switch (job) {
     case Job::Store:
-      out.ok = store_.save(r.fingerprint, r.payload, out.report);
+    case Job::Restore:
+      out.ok = store_.save(r.fingerprint, r.payload, out.report, &out.error_number);
       break;
+    case Job::ReadFile: {
+      out.stored =
+          store_.load(r.fingerprint, out.bytes, out.report) == ParameterStore::LoadResult::Loaded;
+      out.ok = true;
+      break;
+    }
     case Job::Checksum: {
       std::vector<uint8_t> payload;
       std::string detail;
@@ -151,13 +171,17 @@ bool ParameterWriter::run_one() {
   s.running = true;
   lock.unlock();
   Result result = execute(job, request);
-  if (job == Job::Store || job == Job::Reset) {  // 0xFBF2 store, 0xFBF0 factory reset
+  // 0xFBF2 store, 0xFBF0 factory reset, FoE restore
+  if (job == Job::Store || job == Job::Reset || job == Job::Restore) {
     base::Event e{.kind = base::EventKind::Store, .code = result.ok ? uint16_t{0} : uint16_t{1}};
-    e.set_text(job == Job::Store ? "store parameters" : "reset stored parameters");
+    e.set_text(job == Job::Store     ? "store parameters"
+               : job == Job::Restore ? "FoE parameter restore"
+                                     : "reset stored parameters");
     base::log_event(e);
   }
   lock.lock();
   s.running = false;
+  result.sequence = ++finished_;
   // A newer request of the same kind queued meanwhile supersedes this result.
   if (!s.queued) {
     if (!s.result) results_.fetch_add(1, std::memory_order_acq_rel);

@@ -1,13 +1,15 @@
 // Runs every file operation of the command objects off the ESC thread: 0xFBF2 store, 0xFBF3
 // checksum, 0xFBF4 load and 0xFBF0 reset (the factory reset deletes the file, both resets read
-// it back). A store is a write, two fsyncs and a rename: several milliseconds on a real disk,
-// long enough for SOEM (2 ms frame timeout) to lose the frames a blocked ESC thread could not
-// answer; a read of a planted file could block or take long too. So each SDO write returns at
-// once with status 255 "command is executing" (ETG.5003.1 command status) and this worker does
-// the file work; the ESC thread takes the result with take() and finishes the command (status
-// 0/1 done, 2 error) while the master polls subindex 2.
+// it back), and those of the FoE file parameters.bin (docs/FOE.md): its read (ReadFile) and the
+// durable save of a restored set (Restore). A store is a write, two fsyncs and a rename: several
+// milliseconds on a real disk, long enough for SOEM (2 ms frame timeout) to lose the frames a
+// blocked ESC thread could not answer; a read of a planted file could block or take long too. So
+// each SDO write returns at once with status 255 "command is executing" (ETG.5003.1 command status)
+// and this worker does the file work; the ESC thread takes the result with take() and finishes the
+// command (status 0/1 done, 2 error) while the master polls subindex 2.
 //
-// Jobs run in the order they were submitted (a checksum after a store sums what was stored);
+// Jobs run in the order they were submitted (a checksum after a store sums what was stored, an
+// FoE read after a store reads what was stored: no waiting for the store on the ESC thread);
 // a job submitted again while still queued replaces its own earlier request (the latest store
 // snapshot is the one that ends up on disk).
 //
@@ -33,14 +35,16 @@ namespace rackcat::mdp {
 
 class ParameterWriter final : private BackgroundWorker::Client {
  public:
-  enum class Job : uint8_t { Store, Checksum, Load, Reset };
-  static constexpr size_t kJobs = 4;
+  enum class Job : uint8_t { Store, Checksum, Load, Reset, ReadFile, Restore };
+  static constexpr size_t kJobs = 6;
 
   struct Result {
     bool ok = false;
     std::string report;          // one line: why not ok, or what was loaded (no file content)
-    std::vector<uint8_t> bytes;  // Checksum: the digest; Load/Reset: the stored payload
-    bool stored = false;         // Load/Reset: a valid file was read (else: none stored)
+    std::vector<uint8_t> bytes;  // Checksum: the digest; Load/Reset/ReadFile: the stored payload
+    bool stored = false;         // Load/Reset/ReadFile: a valid file was read (else: none stored)
+    int error_number = 0;        // Store/Restore not ok: the errno of the failed call (or 0)
+    uint64_t sequence = 0;       // finishing order: results taken together apply in this order
   };
 
   explicit ParameterWriter(const ParameterStore& store,
@@ -55,6 +59,12 @@ class ParameterWriter final : private BackgroundWorker::Client {
   // over `defaults` when nothing valid is stored.
   void submit_checksum(uint32_t fingerprint, uint8_t algorithm, std::vector<uint8_t> defaults);
   void submit_load(uint32_t fingerprint);
+  // The stored payload for an FoE read of parameters.bin (ok; `stored` false when none is
+  // valid: the caller serves its defaults).
+  void submit_read_file(uint32_t fingerprint);
+  // Saves `payload` as a store does (FoE write of parameters.bin); the caller applies it to the
+  // objects once the result says ok.
+  void submit_restore(uint32_t fingerprint, std::vector<uint8_t> payload);
   // `also`: more file work of the reset (the device's firmware container), run on the worker
   // before the result is published.
   void submit_reset(uint32_t fingerprint, bool factory, std::function<void()> also = {});
@@ -72,7 +82,7 @@ class ParameterWriter final : private BackgroundWorker::Client {
  private:
   struct Request {
     uint32_t fingerprint = 0;
-    std::vector<uint8_t> payload;  // Store: the snapshot; Checksum: the defaults
+    std::vector<uint8_t> payload;  // Store/Restore: the set to save; Checksum: the defaults
     uint8_t algorithm = 0;
     bool factory = false;
     std::function<void()> also;  // Reset: the caller's own file work
@@ -94,6 +104,7 @@ class ParameterWriter final : private BackgroundWorker::Client {
   std::deque<Job> order_;
   std::array<Slot, kJobs> slots_;
   std::atomic<unsigned> results_{0};  // results set and not yet taken
+  uint64_t finished_ = 0;             // jobs finished (under mutex_): Result::sequence
 };
 
 }  // namespace rackcat::mdp

@@ -147,8 +147,11 @@ StateDirectory::ReadResult StateDirectory::read(const std::string& name, size_t 
 }
 
 bool StateDirectory::replace(const std::string& name, std::span<const uint8_t> bytes, mode_t mode,
-                             std::string& error) const {
+                             std::string& error, int* error_number) const {
   const std::string path = path_ + "/" + name;
+  int ignored = 0;
+  int& err = error_number != nullptr ? *error_number : ignored;
+  err = 0;
   if (!usable()) {
     error = problem_;
     return false;
@@ -161,17 +164,20 @@ bool StateDirectory::replace(const std::string& name, std::span<const uint8_t> b
   // A leftover temp file (or a symlink planted in its place) is removed, never followed: the
   // new one is created afresh (O_EXCL, O_NOFOLLOW), so a store writes only inside the directory.
   if (::unlinkat(fd_, tmp.c_str(), 0) != 0 && errno != ENOENT) {
-    error = "cannot remove " + path + ".tmp: " + reason(errno);
+    err = errno;
+    error = "cannot remove " + path + ".tmp: " + reason(err);
     return false;
   }
   const int fd =
       ::openat(fd_, tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, mode);
   if (fd < 0) {
-    error = "cannot create " + path + ".tmp: " + reason(errno);
+    err = errno;
+    error = "cannot create " + path + ".tmp: " + reason(err);
     return false;
   }
   auto fail = [&](const char* what) {
-    error = std::string(what) + " " + path + ".tmp: " + reason(errno);
+    err = errno;
+    error = std::string(what) + " " + path + ".tmp: " + reason(err);
     ::close(fd);
     ::unlinkat(fd_, tmp.c_str(), 0);
     return false;
@@ -183,12 +189,14 @@ bool StateDirectory::replace(const std::string& name, std::span<const uint8_t> b
   // rename(2) replaces a symlink or file named `name` itself, never what it points to; a
   // directory there makes it fail (EISDIR), leaving everything as it was.
   if (::renameat(fd_, tmp.c_str(), fd_, name.c_str()) != 0) {
-    error = "cannot rename onto " + path + ": " + reason(errno);
+    err = errno;
+    error = "cannot rename onto " + path + ": " + reason(err);
     ::unlinkat(fd_, tmp.c_str(), 0);
     return false;
   }
   if (::fsync(fd_) != 0) {
-    error = "cannot fsync " + path_ + ": " + reason(errno);
+    err = errno;
+    error = "cannot fsync " + path_ + ": " + reason(err);
     return false;
   }
   return true;

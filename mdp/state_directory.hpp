@@ -50,8 +50,10 @@ class StateDirectory {
                   std::string& why) const;
   // Replaces `name` by `bytes` (mode `mode`, owned by the calling user). A planted temp file
   // or symlink is removed, never followed. False with `error`; the old file is then unchanged.
+  // `error_number` (when given) receives the errno of the failed call (ENOSPC for a full
+  // disk...), 0 when the directory is unusable or the name is not a single component.
   bool replace(const std::string& name, std::span<const uint8_t> bytes, mode_t mode,
-               std::string& error) const;
+               std::string& error, int* error_number = nullptr) const;
   // Deletes `name` durably; a missing file is success.
   bool remove(const std::string& name, std::string& error) const;
 

@@ -75,9 +75,9 @@ mailbox::Answer RackSlave::FoeMailbox::on_request(const ecat::MailboxRequest& re
   return slave.device_->foe_request(request.data, request.capacity, reply);
 }
 
-size_t RackSlave::FoeMailbox::poll(std::span<uint8_t>) {
-  slave.device_->foe_poll();
-  return 0;
+size_t RackSlave::FoeMailbox::poll(std::span<uint8_t> reply) {
+  // Timeouts, a commit's end, and a parameters.bin read's deferred first Data (file_access.hpp).
+  return slave.device_->foe_poll(reply);
 }
 
 mailbox::Answer RackSlave::CoeMailbox::on_request(const ecat::MailboxRequest& request,

@@ -233,10 +233,18 @@ class FileAccessTest : public FirmwareStoreTest {
   FileAccess files{store, 42, [this] {
                      FileAccessHooks h;
                      h.state = [this] { return state; };
-                     h.parameter_file = [] { return Bytes{'P'}; };
+                     h.start_parameter_read = [] {};
+                     h.poll_parameter_read = [](Bytes& out) {
+                       out = Bytes{'P'};
+                       return foe::ReadProgress{};
+                     };
+                     h.abort_parameter_read = [] {};
                      h.restore_parameters = [this](std::span<const uint8_t> f, std::string&) {
                        restored.assign(f.begin(), f.end());
                        return FoeError::None;
+                     };
+                     h.poll_restore = [](std::string&) {
+                       return foe::CommitProgress{false, FoeError::None, 1, 1};
                      };
                      h.running_firmware = [] { return Bytes{'F'}; };
                      h.verify_firmware = verifier();
