@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "base/little_endian.hpp"
+#include "base/round_time.hpp"
 
 namespace rackcat::ecat {
 
@@ -145,6 +146,8 @@ void Segment::rebuild_logical_map() {
 }
 
 void Segment::after_frame() {
+  // One clock read for the whole round (base/round_time.hpp).
+  const base::RoundTime::Scope round;
   while (round_left_ != 0) {
     const size_t k = cursor_;
     cursor_ = k + 1 == round_span_ ? 0 : k + 1;
@@ -155,6 +158,7 @@ void Segment::after_frame() {
 
 bool Segment::run_firmware_slice(uint64_t budget_ns) {
   if (round_left_ == 0) return false;
+  const base::RoundTime::Scope round;
   const uint64_t until = clock_.now_ns() + budget_ns;
   do {
     const size_t k = cursor_;

@@ -13,7 +13,9 @@
 #include <optional>
 #include <utility>
 
+#include "base/round_time.hpp"
 #include "coe/bits.hpp"
+#include "coe/entry_slot.hpp"
 #include "coe/process_image.hpp"
 #include "coe/sdo_server.hpp"
 #include "foe/foe_server.hpp"
@@ -66,10 +68,18 @@ struct Device::Impl final : DeviceRuntime {
   Impl(const Impl&) = delete;
   Impl& operator=(const Impl&) = delete;
   Device* self = nullptr;
+  // --- What write_outputs/read_inputs touch, side by side (issue 16: the cyclic path of a
+  // line of devices is bound by cache misses, not instructions).
+  std::optional<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
+  std::vector<CycleListener*> listeners;
+  // 0xF6F0/0xF6F2 (input latch times): their entries' slots, found once when the dictionary is
+  // built, so the cyclic path does no dictionary or entry lookup.
+  std::vector<coe::EntrySlot> latch_local_slots, latch_esc_slots;
+  uint64_t last_sync_ns = 0;
+  std::chrono::steady_clock::time_point power_on = std::chrono::steady_clock::now();
   RackConfig config;
   coe::ObjectDictionary od;
   std::unique_ptr<coe::SdoServer> sdo;
-  std::unique_ptr<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
   std::unique_ptr<ParameterSet> params;
   std::shared_ptr<StateDirectory> dir;
   base::BackgroundWorker* worker = nullptr;  // the file work's (DeviceOptions::worker)
@@ -85,16 +95,9 @@ struct Device::Impl final : DeviceRuntime {
   std::string state_dir;
   std::string load_report;
   EsmState state = EsmState::Init;
-  std::vector<CycleListener*> listeners;
   SyncStatistics stats[2];
-  std::chrono::steady_clock::time_point power_on = std::chrono::steady_clock::now();
   int64_t clock_offset = 0;    // clock written to 0x2000:08 minus the system clock
   bool reset_factory = false;  // the 0xFBF0 command the worker executes is a factory reset
-  uint64_t last_sync_ns = 0;
-  // 0xF6F0/0xF6F2 (input latch times), looked up once when the dictionary is built: the cyclic
-  // path does no dictionary lookup.
-  Object* input_latch_local = nullptr;
-  Object* input_latch_esc = nullptr;
   std::chrono::steady_clock::time_point last_sync_at{};
   coe::diag::History history{kDiagnosisMessages};
   std::vector<uint8_t> enumerated;  // per module: enumerated now (module_enumeration.hpp)
@@ -103,10 +106,23 @@ struct Device::Impl final : DeviceRuntime {
     for (CycleListener* l : listeners) f(*l);
   }
 
+  // The firmware round's time (base/round_time.hpp): one clock read per round, not per slave.
   uint32_t uptime_us() const {
-    return static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::microseconds>(
-                                     std::chrono::steady_clock::now() - power_on)
-                                     .count());
+    return static_cast<uint32_t>(
+        std::chrono::duration_cast<std::chrono::microseconds>(base::RoundTime::now() - power_on)
+            .count());
+  }
+
+  // Entries 1..sub0 of a latch array. Both arrays are read-only with one entry per module
+  // (objects_cdp.cpp), so sub0 is fixed once the dictionary is built.
+  static std::vector<coe::EntrySlot> array_slots(Object* o) {
+    std::vector<coe::EntrySlot> slots;
+    if (o == nullptr) return slots;
+    for (uint8_t s = 1; s != 0 && s <= o->sub0(); ++s) slots.emplace_back(*o, s);
+    return slots;
+  }
+  static void set_array(std::vector<coe::EntrySlot>& slots, uint64_t value) {
+    for (coe::EntrySlot& slot : slots) slot.set(value);
   }
 
   // --- stored parameters -------------------------------------------------------------------
@@ -456,13 +472,13 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.worker = options.worker != nullptr ? options.worker : &base::BackgroundWorker::shared();
   d.load_firmware();  // before the dictionary: the firmware's version is what it reports
   build_object_dictionary(d.config, d.od);
-  d.input_latch_local = d.od.find(0xF6F0);
-  d.input_latch_esc = d.od.find(0xF6F2);
+  d.latch_local_slots = Impl::array_slots(d.od.find(0xF6F0));
+  d.latch_esc_slots = Impl::array_slots(d.od.find(0xF6F2));
   d.params = std::make_unique<ParameterSet>(d.od, d.config);
   d.default_payload = d.params->capture();
   d.store = std::make_unique<ParameterStore>(d.dir);
   d.writer = std::make_unique<ParameterWriter>(*d.store, *d.worker);
-  d.image = std::make_unique<coe::ProcessImage>(d.od);
+  d.image.emplace(d.od);
   attach_device_behaviour(d.config, d.od, d);
   d.history.bind(*d.od.find(coe::diag::kIndex));
   if (options.load_stored_parameters) {
@@ -622,13 +638,8 @@ void Device::read_inputs(std::span<uint8_t> sm3) {
   Impl& d = *impl_;
   d.notify([&](CycleListener& l) { l.before_inputs(*this); });
   // 0xF6F0/0xF6F2: the input latch time of every module is this update.
-  if (Object* local = d.input_latch_local) {
-    const uint32_t now = d.uptime_us();
-    for (uint8_t s = 1; s <= local->sub0(); ++s) local->set_u(s, now);
-  }
-  if (Object* esc = d.input_latch_esc) {
-    for (uint8_t s = 1; s <= esc->sub0(); ++s) esc->set_u(s, d.last_sync_ns);
-  }
+  if (!d.latch_local_slots.empty()) Impl::set_array(d.latch_local_slots, d.uptime_us());
+  Impl::set_array(d.latch_esc_slots, d.last_sync_ns);
   d.image->read_inputs(sm3);
 }
 

@@ -3,9 +3,12 @@
 // process. Target: < 5 µs per cycle (docs/PERFORMANCE.md "## modules").
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <memory>
 #include <vector>
 
+#include "base/round_time.hpp"
 #include "mdp/device.hpp"
 #include "mdp/rack_config.hpp"
 #include "modules/cards/analog_scale.hpp"
@@ -130,6 +133,61 @@ void BM_RtdChannel(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_RtdChannel);
+
+// The tiny rack of examples/tiny-rack.yaml (a relay card looped back to a digital input card),
+// N of them in OP, each cycle the application work every slave's firmware does after a frame
+// (SM2 into 0x7nnX and the drivers, then the drivers and 0x6nnX into SM3) in one firmware round
+// (base/round_time.hpp), with the real clock, as `rackcat run --slaves N` runs it in OP.
+// Issue 16's per-slave cost in process; scripts/callgrind_frame.sh counts its instructions.
+constexpr const char* kTinyRack = R"(control_module:
+  part_number: FI-CM0600-00
+  serial_number: FI-CM0600-00-0001
+rims:
+  - rim: 1
+    type: 6-slot
+    unit_information: FUSION RIM 6
+    slots:
+      - {slot: 1, card: CRS-10}
+      - {slot: 2, card: CDI-13, loopback: {rim: 1, slot: 1}}
+)";
+
+struct TinySlave {
+  mdp::Device device;
+  Rack rack;
+  std::vector<uint8_t> sm2, sm3;
+  TinySlave()
+      : device(mdp::parse_rack_config(kTinyRack, "tiny-rack.yaml"), Setup::options()),
+        rack(device) {
+    device.state_changed(EsmState::Init, EsmState::PreOp);
+    device.state_changed(EsmState::PreOp, EsmState::SafeOp);
+    device.state_changed(EsmState::SafeOp, EsmState::Op);
+    sm2.assign(device.output_bytes(), 0);
+    sm3.assign(device.input_bytes(), 0);
+  }
+};
+
+void BM_TinyRackRound(benchmark::State& state) {
+  const auto n = static_cast<size_t>(state.range(0));
+  std::vector<std::unique_ptr<TinySlave>> slaves;
+  for (size_t i = 0; i < n; ++i) slaves.push_back(std::make_unique<TinySlave>());
+  uint8_t pattern = 0;
+  for (auto _ : state) {
+    const base::RoundTime::Scope round;
+    ++pattern;
+    for (auto& s : slaves) {
+      std::fill(s->sm2.begin(), s->sm2.end(), pattern);
+      s->device.write_outputs(s->sm2);
+      s->device.read_inputs(s->sm3);
+      benchmark::DoNotOptimize(s->sm3.data());
+    }
+  }
+  if (slaves[0]->sm3.empty() || slaves[0]->sm2.empty()) state.SkipWithError("no process data");
+  state.counters["slaves"] = static_cast<double>(n);
+  state.counters["ns_per_slave"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(n),
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_TinyRackRound)->Arg(1)->Arg(16)->Arg(199)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

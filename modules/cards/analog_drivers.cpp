@@ -6,9 +6,9 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "coe/entry_slot.hpp"
 #include "modules/cards/analog_scale.hpp"
 #include "modules/cards/drivers.hpp"
-#include "modules/cards/entry_slot.hpp"
 #include "modules/cards/safe_state.hpp"
 #include "modules/cards/substitute.hpp"
 
@@ -102,7 +102,7 @@ class AnalogInputDriver final : public CardDriver {
   AnalogScale scale_;
   unsigned samples_;
   std::vector<std::span<uint8_t>> raw_;
-  std::vector<EntrySlot> slots_;
+  std::vector<coe::EntrySlot> slots_;
 };
 
 class AnalogOutputDriver final : public CardDriver {

@@ -14,6 +14,8 @@ CardDriver::CardDriver(const mdp::Module& module, coe::ObjectDictionary& od, siz
   input_reaction_ = object(0x4000, sv::kInputReaction);
   input_value_ = object(0x4000, sv::kInputValue);
   input_status_ = object(0x4000, sv::kInputStatus);
+  if (input_reaction_ != nullptr) reaction_channels_ = input_reaction_->max_subindex();
+  if (input_status_ != nullptr) input_status_slot_ = coe::EntrySlot(*input_status_, 0);
 }
 
 uint16_t CardDriver::output_reaction(size_t i) const {
@@ -26,7 +28,7 @@ uint16_t CardDriver::output_reaction(size_t i) const {
 void CardDriver::substitute_inputs(bool rim_offline) {
   if (input_reaction_ == nullptr) return;
   uint32_t status = 0;
-  for (size_t i = 0; i < inputs_.size() && i < input_reaction_->max_subindex(); ++i) {
+  for (size_t i = 0; i < inputs_.size() && i < reaction_channels_; ++i) {
     InputChannel& in = inputs_[i];
     if (!rim_offline && !in.open) {
       in.last_valid = in.code;
@@ -40,7 +42,7 @@ void CardDriver::substitute_inputs(bool rim_offline) {
     in.code = input_substitute(reaction, in.code, in.last_valid, value);
     put_input_code(i, in.code);
   }
-  if (input_status_ != nullptr) input_status_->set_u(0, status);
+  input_status_slot_.set(status);
 }
 
 coe::Object* CardDriver::object(uint16_t area_base, uint8_t nibble) {

@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "coe/entry_slot.hpp"
 #include "coe/object_dictionary.hpp"
 #include "mdp/rack_config.hpp"
 #include "modules/signals/signal_source.hpp"
@@ -114,6 +115,9 @@ class CardDriver {
   coe::Object* input_reaction_ = nullptr;   // 0x4nnA
   coe::Object* input_value_ = nullptr;      // 0x4nnB
   coe::Object* input_status_ = nullptr;     // 0x4nnC
+  // Cyclic path: the channels 0x4nnA has entries for, and 0x4nnC's value slot.
+  size_t reaction_channels_ = 0;
+  coe::EntrySlot input_status_slot_;
 };
 
 // The driver for a module's card (by the catalogue's Signal); every input starts with a

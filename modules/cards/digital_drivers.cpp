@@ -7,8 +7,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "coe/entry_slot.hpp"
 #include "modules/cards/drivers.hpp"
-#include "modules/cards/entry_slot.hpp"
 #include "modules/cards/safe_state.hpp"
 #include "modules/cards/substitute.hpp"
 
@@ -116,7 +116,7 @@ class DigitalInputDriver final : public CardDriver {
   coe::Object& obj_;
   bool inverted_;
   unsigned samples_;
-  EntrySlot word_;  // DINx16 / DINx8 (DINx4 is a BIT4: set_u fallback)
+  coe::EntrySlot word_;  // DINx16 / DINx8 (DINx4 is a BIT4: set_u fallback)
   std::span<uint8_t> raw_;
   unsigned sample_bytes_ = 1;
 };
@@ -131,9 +131,10 @@ class DigitalOutputs {
                 ? &require_object(od, m.index(0x4000, static_cast<uint8_t>(*m.card->safe_state)), m)
                 : nullptr),
         channels_(m.card->channels),
-        mask_(channels_ >= 32 ? 0xFFFFFFFFu : (1u << channels_) - 1u) {}
+        mask_(channels_ >= 32 ? 0xFFFFFFFFu : (1u << channels_) - 1u),
+        word_(out_, 1) {}
 
-  uint32_t commanded() const { return static_cast<uint32_t>(out_.get_u(1)) & mask_; }
+  uint32_t commanded() const { return static_cast<uint32_t>(word_.get()) & mask_; }
   uint32_t safe_word(uint32_t current) const {
     if (safe_ == nullptr) return 0;
     return digital_safe_state(current, static_cast<uint32_t>(safe_->get_u(1)),
@@ -165,6 +166,7 @@ class DigitalOutputs {
   coe::Object* safe_;
   unsigned channels_;
   uint32_t mask_;
+  coe::EntrySlot word_;  // 0x7nnX:01
 };
 
 uint32_t driven_word(std::span<const OutputChannel> outs) {
@@ -186,7 +188,9 @@ class DigitalOutputDriver final : public CardDriver {
         feedback_(m.card->input ? &require_object(
                                       od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)
                                 : nullptr),
-        sourcing_(m.card->signal == mdp::Signal::DigitalOutSource) {}
+        sourcing_(m.card->signal == mdp::Signal::DigitalOutSource) {
+    if (feedback_ != nullptr) feedback_word_ = coe::EntrySlot(*feedback_, 1);
+  }
 
   void read_outputs() override {
     const uint32_t word = dout_.commanded();
@@ -200,11 +204,9 @@ class DigitalOutputDriver final : public CardDriver {
   void write_inputs(double, double) override {
     // Force-guided relays report their feedback contacts: the contact state follows the
     // wire (a welded contact shows up as a mismatch against the command).
-    if (feedback_ != nullptr) feedback_->set_u(1, wire_word(outputs_));
+    if (feedback_ != nullptr) feedback_word_.set(wire_word(outputs_));
   }
-  void clear_inputs() override {
-    if (feedback_ != nullptr) feedback_->set_u(1, 0);
-  }
+  void clear_inputs() override { feedback_word_.set(0); }
   const char* output_unit() const override { return "bit"; }
   bool detects_wiring_faults() const override { return sourcing_; }
 
@@ -218,6 +220,7 @@ class DigitalOutputDriver final : public CardDriver {
 
   DigitalOutputs dout_;
   coe::Object* feedback_;
+  coe::EntrySlot feedback_word_;  // 0x6nnX:01 when the card has feedback contacts
   bool sourcing_;
 };
 

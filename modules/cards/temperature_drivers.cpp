@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "coe/entry_slot.hpp"
 #include "modules/cards/drivers.hpp"
-#include "modules/cards/entry_slot.hpp"
 #include "modules/cards/rtd.hpp"
 #include "modules/cards/temperature_scale.hpp"
 #include "modules/cards/thermocouple.hpp"
@@ -93,7 +93,7 @@ class ThermocoupleDriver final : public CardDriver {
     uint16_t code = 0;
   };
   std::vector<Cache> cache_;
-  std::vector<EntrySlot> slots_, ohm_slots_;
+  std::vector<coe::EntrySlot> slots_, ohm_slots_;
   double cold_junction_c_ = 25.0;  // terminal block temperature
 };
 
@@ -134,7 +134,7 @@ class RtdDriver final : public CardDriver {
  public:
  private:
   coe::Object& obj_;
-  std::vector<EntrySlot> slots_;
+  std::vector<coe::EntrySlot> slots_;
 };
 
 }  // namespace

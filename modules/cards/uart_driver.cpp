@@ -70,10 +70,10 @@ UartDriver::UartDriver(const mdp::Module& m, coe::ObjectDictionary& od)
     rx_obj_[c] = od.find(m.index(0x5000, static_cast<uint8_t>(0xB + c)));
   }
   for (size_t c = 0; c < 4; ++c) {
-    status_slots_[c] = EntrySlot(status_pdo_, static_cast<uint8_t>(1 + c));
+    status_slots_[c] = coe::EntrySlot(status_pdo_, static_cast<uint8_t>(1 + c));
     if (info_ != nullptr) {
-      info_status_[c] = EntrySlot(*info_, static_cast<uint8_t>(5 + c));
-      info_errors_[c] = EntrySlot(*info_, static_cast<uint8_t>(9 + c));
+      info_status_[c] = coe::EntrySlot(*info_, static_cast<uint8_t>(5 + c));
+      info_errors_[c] = coe::EntrySlot(*info_, static_cast<uint8_t>(9 + c));
     }
   }
   read_config();

@@ -36,9 +36,9 @@
 #include <utility>
 #include <vector>
 
+#include "coe/entry_slot.hpp"
 #include "modules/cards/byte_ring.hpp"
 #include "modules/cards/card_driver.hpp"
-#include "modules/cards/entry_slot.hpp"
 
 namespace rackcat::modules {
 
@@ -129,7 +129,7 @@ class UartDriver final : public CardDriver {
   coe::Object* info_;        // 0x5nn6
   std::array<coe::Object*, 4> tx_obj_{};
   std::array<coe::Object*, 4> rx_obj_{};
-  std::array<EntrySlot, 4> status_slots_, info_status_, info_errors_;
+  std::array<coe::EntrySlot, 4> status_slots_, info_status_, info_errors_;
   std::vector<std::pair<coe::Object*, coe::ObjectHooks>> saved_hooks_;
   std::thread thread_;
   std::atomic<bool> running_{false};

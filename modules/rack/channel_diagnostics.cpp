@@ -62,11 +62,16 @@ ChannelDiagnostics::ChannelDiagnostics(mdp::Device& device,
     : device_(device),
       drivers_(drivers),
       uarts_(drivers.size(), nullptr),
+      input_causes_(drivers.size(), 0),
+      active_(drivers.size(), 0),
       inputs_(drivers.size()),
       outputs_(drivers.size()),
       uart_errors_(drivers.size()) {
   for (size_t i = 0; i < drivers.size(); ++i) {
     uarts_[i] = dynamic_cast<UartDriver*>(drivers[i].get());
+    input_causes_[i] =
+        drivers[i]->has_sensor_break() || drivers[i]->card().signal == mdp::Signal::AnalogIn;
+    active_[i] = input_causes_[i] || uarts_[i] != nullptr;
   }
   reset();
 }
@@ -99,7 +104,8 @@ void ChannelDiagnostics::evaluate_module(size_t i) {
     reported = now;
   };
   const auto ins = d.inputs();
-  for (size_t ch = 0; ch < ins.size() && ch < 16; ++ch) {
+  // input_causes() is 0 for every channel of the other cards (and so is what was reported).
+  for (size_t ch = 0; input_causes_[i] && ch < ins.size() && ch < 16; ++ch) {
     diff(inputs_[i][ch], input_causes(d, ins[ch]), ch);
   }
   const auto outs = d.outputs();

@@ -37,9 +37,12 @@ class ChannelDiagnostics {
   template <class Online>
   void evaluate(Online&& online) {
     for (size_t i = 0; i < drivers_.size(); ++i) {
-      if (online(i)) evaluate_module(i);
+      if (active_[i] && online(i)) evaluate_module(i);
     }
   }
+  // An output fault (overload / overtemperature) was injected on module index i: its output
+  // channels are evaluated from now on (without one they have no cause to report).
+  void watch_outputs(size_t module_index) { active_.at(module_index) = 1; }
   // Forget what was reported (0xFBF0 device reset: the history is empty again); the next
   // evaluate() reports what is still active.
   void reset();
@@ -50,7 +53,13 @@ class ChannelDiagnostics {
 
   mdp::Device& device_;
   std::span<const std::unique_ptr<CardDriver>> drivers_;
-  std::vector<UartDriver*> uarts_;                // index = module index, null if no UART
+  std::vector<UartDriver*> uarts_;  // index = module index, null if no UART
+  // Whether the card's inputs can have a cause at all (sensor break, analog limits): fixed by
+  // the card kind, so the cyclic path skips the channels of the others.
+  std::vector<uint8_t> input_causes_;
+  // Whether a module can have anything to report: input causes, a UART, or an output fault
+  // injected once (watch_outputs). The cyclic path skips the others.
+  std::vector<uint8_t> active_;
   std::vector<std::array<uint8_t, 16>> inputs_;   // reported cause bits per input channel
   std::vector<std::array<uint8_t, 16>> outputs_;  // ... per output channel
   std::vector<std::array<uint8_t, 4>> uart_errors_;

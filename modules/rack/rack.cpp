@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include "base/event_log.hpp"
+#include "base/round_time.hpp"
 
 #include <bit>
 #include <chrono>
@@ -19,10 +20,6 @@
 
 namespace rackcat::modules {
 namespace {
-
-double steady_seconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 void set_real(coe::Object* o, uint8_t sub, double v) {
   if (o != nullptr && o->entry(sub) != nullptr)
@@ -55,10 +52,7 @@ Rack::Rack(mdp::Device& device, RackOptions options)
             }}),
       cpu_fan_rpm_(options_.fan_nominal_rpm),
       cpu_temp_(options_.cpu_temperature_c) {
-  if (!options_.clock) {
-    const double start = steady_seconds();
-    options_.clock = [start] { return steady_seconds() - start; };
-  }
+  start_ = base::RoundTime::now();
   if (!(options_.cycle_time_s > 0.0)) throw std::invalid_argument("cycle time must be > 0");
   const mdp::RackConfig& cfg = device_.config();
   coe::ObjectDictionary& od = device_.dictionary();
@@ -83,7 +77,9 @@ Rack::Rack(mdp::Device& device, RackOptions options)
     rims_[m.rim].modules.push_back(m.number);
     if (auto* u = dynamic_cast<UartDriver*>(drivers_[m.number - 1].get())) uarts_.push_back(u);
     if (auto* e = dynamic_cast<EncoderDriver*>(drivers_[m.number - 1].get())) e->attach(device_);
+    if (drivers_[m.number - 1]->detects_wiring_faults()) fault_drivers_.push_back(m.number - 1);
   }
+  for (const auto& [rr, rim] : rims_) rim_online_[rr] = rim.state == RimState::Online;
   channel_diag_ = std::make_unique<ChannelDiagnostics>(device_, drivers_);
 
   // A replay file is read below the rack file's own directory (mdp::FileRoot: no "..", no
@@ -177,7 +173,8 @@ Rack::~Rack() {
 }
 
 double Rack::now() const {
-  return options_.clock();
+  if (options_.clock) return options_.clock();
+  return std::chrono::duration<double>(base::RoundTime::now() - start_).count();
 }
 
 CardDriver* Rack::driver(uint16_t module_number) {
@@ -191,8 +188,7 @@ CardDriver* Rack::driver_at(uint8_t rim, uint8_t slot) {
 }
 
 bool Rack::rim_online(uint8_t rim) const {
-  auto it = rims_.find(rim);
-  return it != rims_.end() && it->second.state == RimState::Online;
+  return rim_online_[rim];
 }
 
 void Rack::start_uart_ptys() {
@@ -253,12 +249,15 @@ void Rack::on_clock() {
 
 void Rack::evaluate_faults() {
   bool unsafe_in_rim[6] = {};
-  for (size_t i = 0; i < drivers_.size(); ++i) {
+  bool any_unsafe = false;
+  for (const uint16_t i : fault_drivers_) {
     CardDriver& d = *drivers_[i];
-    if (!d.detects_wiring_faults()) continue;
     const uint32_t safe = d.safe_wiring_faults();
     const uint32_t unsafe = d.unsafe_wiring_faults();
-    if (unsafe) unsafe_in_rim[module_rim_[i]] = true;
+    if (unsafe) {
+      unsafe_in_rim[module_rim_[i]] = true;
+      any_unsafe = true;
+    }
     if (safe != last_safe_[i] || unsafe != last_unsafe_[i]) {
       last_safe_[i] = safe;
       last_unsafe_[i] = unsafe;
@@ -269,10 +268,13 @@ void Rack::evaluate_faults() {
   // An unsafe wiring fault takes its RIM out of ONLINE (guide Table 23): the RIM drives its
   // outputs to the TÜV-safe level; it returns when the fault is gone. An ERROR state set for
   // another reason (guide Table 16 state 3, `rackcat ctl rim-state`) is not the fault's to end.
+  // Nothing to do while no RIM has an unsafe fault and none ever went to ERROR for one.
+  if (!any_unsafe && !fault_error_seen_) return;
   for (auto& [rr, rim] : rims_) {
     if (unsafe_in_rim[rr] && rim.state == RimState::Online) {
       set_rim_state(rr, RimState::Error, rim.comm_error);
       rim.fault_error = true;
+      fault_error_seen_ = true;
     } else if (!unsafe_in_rim[rr] && rim.state == RimState::Error && rim.fault_error) {
       set_rim_state(rr, RimState::Online, false);
     }
@@ -398,6 +400,7 @@ void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
   RimStatus& rim = it->second;
   const RimState prev = rim.state;
   rim.state = state;
+  rim_online_[rr] = state == RimState::Online;
   if (prev != state) {
     base::log_event({.kind = base::EventKind::RimState,
                      .a = rr,
@@ -562,6 +565,7 @@ void Rack::set_output_fault(uint16_t module, size_t channel, bool overload, bool
         fmt::format("module {} has {} output channels", module, d->outputs().size()));
   d->outputs()[channel].overload = overload;
   d->outputs()[channel].overtemperature = overtemperature;
+  channel_diag_->watch_outputs(module - 1u);
 }
 
 void Rack::set_encoder_fault(uint16_t module, EncoderFault fault, bool active, int64_t jump_steps) {

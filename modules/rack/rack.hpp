@@ -19,6 +19,8 @@
 // prepared command to that thread through a post function and waits for the answer.
 #pragma once
 
+#include <array>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -49,7 +51,8 @@ struct RackOptions {
   // Nominal process-data cycle: plants are discretised with it and stepped as often as it
   // fits into the elapsed time.
   double cycle_time_s = 0.001;
-  // Seconds since start, monotonic. Empty: std::chrono::steady_clock.
+  // Seconds since start, monotonic. Empty: std::chrono::steady_clock, read once per firmware
+  // round (base/round_time.hpp).
   std::function<double()> clock;
   double fan_nominal_rpm = 3000.0;
   double cpu_temperature_c = 42.0;
@@ -174,6 +177,11 @@ class Rack : public mdp::CycleListener {
   std::vector<uint8_t> module_rim_;                   // index = module number - 1
   std::vector<UartDriver*> uarts_;
   std::map<uint8_t, RimStatus> rims_;
+  // rims_[r].state == Online by RIM number, kept by set_rim_state: the cyclic path's test.
+  std::array<bool, 256> rim_online_{};
+  std::vector<uint16_t> fault_drivers_;          // drivers that detect wiring faults (by card kind)
+  bool fault_error_seen_ = false;                // a RIM went to ERROR for a wiring fault once
+  std::chrono::steady_clock::time_point start_;  // now() = 0 (the default clock)
   std::map<std::string, std::unique_ptr<StateSpacePlant>> plants_;
   ExceptionTree tree_;
   std::unique_ptr<ChannelDiagnostics> channel_diag_;  // after drivers_ exist

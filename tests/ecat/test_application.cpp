@@ -1,5 +1,6 @@
 #include "tests/ecat/test_application.hpp"
 
+#include "base/round_time.hpp"
 #include "ecat/slave/mailbox_server.hpp"
 
 #include <algorithm>
@@ -131,6 +132,7 @@ size_t TestApplication::poll(std::span<uint8_t> reply) {
 
 void TestApplication::update_inputs(std::span<uint8_t> inputs) {
   ++inputs_count;
+  inputs_time = base::RoundTime::now();
   std::copy_n(inputs_value.begin(), std::min(inputs.size(), inputs_value.size()), inputs.begin());
 }
 

@@ -3,6 +3,7 @@
 // categories), a mailbox that echoes every request's data, and records of what the ESC called.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -54,6 +55,8 @@ class TestApplication : public Application, public MailboxProtocol {
   std::vector<uint8_t> last_outputs;
   int outputs_count = 0;
   int inputs_count = 0;
+  // base::RoundTime::now() when update_inputs ran (the firmware round's time).
+  std::chrono::steady_clock::time_point inputs_time{};
   int mailbox_requests = 0;
   std::vector<uint8_t> last_request;       // its mailbox data
   std::vector<uint8_t> pending_emergency;  // mailbox data sent by poll() once

@@ -2,6 +2,7 @@
 // counters, process data to and from every device, ports and loop control.
 #include <gtest/gtest.h>
 
+#include "base/round_time.hpp"
 #include "ecat/registers.hpp"
 #include "tests/ecat/test_master.hpp"
 
@@ -158,6 +159,26 @@ TEST(Segment, NextEventBoundIsEarlyNeverLate) {
   line.segment->service();
   for (size_t i = 0; i < 3; ++i) EXPECT_EQ(line.esc(i).al_status() & 0x0F, 0x04) << i;
   EXPECT_EQ(line.segment->next_event_bound_ns(), UINT64_MAX);
+}
+
+// One clock read per firmware round (base/round_time.hpp): every slave's application reads the
+// time the round began; the next round reads the clock again; outside a round now() is the
+// clock itself.
+TEST(Segment, TheSlavesOfAFirmwareRoundShareOneTime) {
+  Line line(8);
+  line.to_op();
+  const std::vector<uint8_t> outputs(8 * kOutputBytes, 0x5A);
+  line.cycle(outputs);
+  const auto first = line.app(0).inputs_time;
+  for (size_t k = 1; k < 8; ++k) EXPECT_EQ(line.app(k).inputs_time, first) << k;
+  const auto outside = base::RoundTime::now();
+  EXPECT_GE(outside, first);
+  while (base::RoundTime::now() == outside) {
+  }
+  line.cycle(outputs);
+  const auto second = line.app(0).inputs_time;
+  EXPECT_GT(second, outside);
+  for (size_t k = 1; k < 8; ++k) EXPECT_EQ(line.app(k).inputs_time, second) << k;
 }
 
 }  // namespace rackcat::ecat::test
