@@ -30,15 +30,36 @@ class EntrySlot {
     }
   }
   void set(uint64_t v) {
-    if (p_ != nullptr) {
-      le::put(p_, bytes_, v);
-    } else if (obj_ != nullptr) {
-      obj_->set_u(sub_, v);
+    switch (p_ != nullptr ? bytes_ : 0) {
+      case 1:
+        p_[0] = static_cast<uint8_t>(v);
+        return;
+      case 2:
+        le::put16(p_, static_cast<uint16_t>(v));
+        return;
+      case 4:
+        le::put32(p_, static_cast<uint32_t>(v));
+        return;
+      case 8:
+        le::put64(p_, v);
+        return;
+      default:
+        if (obj_ != nullptr) obj_->set_u(sub_, v);
     }
   }
   uint64_t get() const {
-    if (p_ != nullptr) return le::get(p_, bytes_);
-    return obj_ != nullptr ? obj_->get_u(sub_) : 0;
+    switch (p_ != nullptr ? bytes_ : 0) {
+      case 1:
+        return p_[0];
+      case 2:
+        return le::get16(p_);
+      case 4:
+        return le::get32(p_);
+      case 8:
+        return le::get64(p_);
+      default:
+        return obj_ != nullptr ? obj_->get_u(sub_) : 0;
+    }
   }
   explicit operator bool() const { return obj_ != nullptr; }
 

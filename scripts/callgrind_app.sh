@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Instructions per slave of the application's cyclic work (bench_modules' BM_TinyRackRound:
 # mdp::Device::write_outputs + read_inputs of N tiny racks in OP, drivers and process image
-# included), counted by callgrind: the inclusive cost of those calls divided by their number.
+# included), counted by callgrind: the inclusive cost of its round function over the rounds
+# and slaves.
 # Independent of the machine's load, so two builds can be compared on a busy machine (the
 # application's share of issue 16's per-slave cost; scripts/callgrind_frame.sh counts the ESC
 # and firmware side). Needs valgrind (Debian package valgrind).
@@ -19,10 +20,10 @@ trap 'rm -rf "$out"' EXIT
 for n in "$@"; do
   valgrind --tool=callgrind --callgrind-out-file="$out/cg.$n" "$bench" \
     --benchmark_filter="BM_TinyRackRound/$n\$" --benchmark_min_time=0.02 >/dev/null 2>&1
+  # The inclusive cost of tiny_rack_round (one round over the N slaves) over its calls.
   callgrind_annotate --inclusive=yes --tree=caller "$out/cg.$n" |
-    grep -B3 -E '\* .*Device::(write_outputs|read_inputs)\(' | grep 'BM_TinyRackRound' |
+    grep -B1 -E '\* .*tiny_rack_round' | grep 'BM_TinyRackRound' |
     sed -E 's/^ *([0-9,]+) .*\(([0-9,]+)x\).*/\1 \2/' | tr -d , |
-    awk -v n="$n" '{ ir += $1; calls[NR] = $2 }
-      END { printf "%d slaves: %.0f instructions per slave (outputs + inputs, %d calls)\n",
-                   n, ir / calls[1], calls[1] }'
+    awk -v n="$n" '{ printf "%d slaves: %.0f instructions per slave (%d rounds)\n",
+                     n, $1 / $2 / n, $2 }'
 done

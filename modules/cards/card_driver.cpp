@@ -49,23 +49,6 @@ coe::Object* CardDriver::object(uint16_t area_base, uint8_t nibble) {
   return od_.find(module_.index(area_base, nibble));
 }
 
-void CardDriver::drive(size_t i, double value, uint32_t code) {
-  OutputChannel& o = outputs_[i];
-  o.driven = value;
-  o.code = code;
-  switch (o.fault) {
-    case WiringFault::None:
-      o.wire = value;
-      break;
-    case WiringFault::ShortToGround:
-      o.wire = 0.0;
-      break;
-    case WiringFault::ShortToSupply:
-      o.wire = 1.0;
-      break;
-  }
-}
-
 void CardDriver::set_wiring_fault(size_t i, WiringFault fault) {
   outputs_[i].fault = fault;
   drive(i, outputs_[i].driven, outputs_[i].code);

@@ -102,8 +102,23 @@ class CardDriver {
 
  protected:
   coe::Object* object(uint16_t area_base, uint8_t nibble);
-  // Update driven value, wire level and code of output i.
-  void drive(size_t i, double value, uint32_t code);
+  // Update driven value, wire level and code of output i (inline: every output, every cycle).
+  void drive(size_t i, double value, uint32_t code) {
+    OutputChannel& o = outputs_[i];
+    o.driven = value;
+    o.code = code;
+    switch (o.fault) {
+      case WiringFault::None:
+        o.wire = value;
+        break;
+      case WiringFault::ShortToGround:
+        o.wire = 0.0;
+        break;
+      case WiringFault::ShortToSupply:
+        o.wire = 1.0;
+        break;
+    }
+  }
   // Puts `code` as input i's process-data value (every sample of an oversampled card).
   virtual void put_input_code(size_t /*i*/, uint32_t /*code*/) {}
 
