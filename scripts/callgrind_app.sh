@@ -21,7 +21,7 @@ for n in "$@"; do
   valgrind --tool=callgrind --callgrind-out-file="$out/cg.$n" "$bench" \
     --benchmark_filter="BM_TinyRackRound/$n\$" --benchmark_min_time=0.02 >/dev/null 2>&1
   # The inclusive cost of tiny_rack_round (one round over the N slaves) over its calls.
-  callgrind_annotate --inclusive=yes --tree=caller "$out/cg.$n" |
+  callgrind_annotate --inclusive=yes --threshold=100 --tree=caller "$out/cg.$n" |
     grep -B1 -E '\* .*tiny_rack_round' | grep 'BM_TinyRackRound' |
     sed -E 's/^ *([0-9,]+) .*\(([0-9,]+)x\).*/\1 \2/' | tr -d , |
     awk -v n="$n" '{ printf "%d slaves: %.0f instructions per slave (%d rounds)\n",
