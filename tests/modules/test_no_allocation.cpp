@@ -5,6 +5,7 @@
 #include <optional>
 #include <vector>
 
+#include "base/round_time.hpp"
 #include "modules/cards/analog_scale.hpp"
 #include "tests/modules/rack_fixture.hpp"
 #include "tests/support/allocation_counter.hpp"
@@ -82,6 +83,10 @@ TEST_F(RackTest, DeviceProcessDataPathAllocatesNothing) {
   for (int k = 0; k < 5000; ++k) {
     outputs[static_cast<size_t>(k) % outputs.size()] = static_cast<uint8_t>(k);
     clock += 0.001;
+    // Every other cycle inside a firmware round (base/round_time.hpp), as Segment::after_frame
+    // runs it: the latch time then comes from the round.
+    std::optional<base::RoundTime::Scope> round;
+    if (k % 2 == 0) round.emplace();
     device.write_outputs(outputs);
     device.read_inputs(inputs);
   }

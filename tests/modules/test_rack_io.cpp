@@ -1,5 +1,8 @@
 // Drivers behind a real mdp::Device: process data in and out, loopbacks, oversampling,
 // temperatures, power-on rule and safe states.
+#include <chrono>
+
+#include "base/round_time.hpp"
 #include "modules/cards/analog_scale.hpp"
 #include "modules/cards/temperature_scale.hpp"
 #include "rack_fixture.hpp"
@@ -248,4 +251,27 @@ TEST_F(RackTest, PlantDrivenByAnAnalogOutputMovesAThermocouple) {
   const auto code = static_cast<int16_t>(module_obj(tc, 0x6000, 0x4).get_u(6));
   EXPECT_NEAR(decode_temperature(code), expect, 0.2);
   EXPECT_EQ(module_obj(tc, 0x6000, 0x4).get_u(7), module_obj(tc, 0x6000, 0x4).get_u(6));
+}
+
+// Without a clock of its own the rack samples at the firmware round's time (base/round_time.hpp,
+// one clock read per round for every slave); outside a round it reads the clock.
+TEST(RackClock, DefaultClockIsTheFirmwareRoundsTime) {
+  mdp::DeviceOptions options;
+  options.state_dir = ::testing::TempDir() + "rack_clock";
+  options.load_stored_parameters = false;
+  mdp::Device device(mdp::default_rack(), options);
+  Rack rack(device);
+  double in_round = 0.0;
+  {
+    const base::RoundTime::Scope round;
+    in_round = rack.now();
+    const auto t0 = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() == t0) {
+    }
+    EXPECT_EQ(rack.now(), in_round);
+  }
+  const auto t1 = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() == t1) {
+  }
+  EXPECT_GT(rack.now(), in_round);
 }
