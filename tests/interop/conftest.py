@@ -197,6 +197,24 @@ def proc_status(pid):
     return fields
 
 
+SAFEOP_ERROR = 0x14  # AL status: SAFEOP with the error flag (ETG.1000.6 §5.3.2)
+
+
+def wait_watchdog_safeop(master, timeout_s=5.0):
+    """After the master fell silent in OP: reads the AL status (reads do not retrigger the SM2
+    watchdog) until slave 0 reports SAFEOP with the error flag, for at most timeout_s; returns
+    slave 0 with state and al_status read. The watchdog's timing is measured by
+    test_master_loss.py; here only the outcome counts, so a slow machine gets a generous
+    deadline instead of a fixed sleep."""
+    s = master.slaves[0]
+    deadline = time.monotonic() + timeout_s
+    while True:
+        master.read_state()
+        if s.state == SAFEOP_ERROR or time.monotonic() > deadline:
+            return s
+        time.sleep(0.01)
+
+
 def tshark_problems(pcap):
     """(total frames, frames dissected as EtherCAT, lines of malformed/error output)."""
     if shutil.which("tshark") is None:

@@ -22,7 +22,8 @@ import time
 
 import pytest
 
-from conftest import BUILD, SlaveProcess, VethNamespace, require_root, tshark_problems
+from conftest import (BUILD, SlaveProcess, VethNamespace, require_root,  # noqa: F401
+                      tshark_problems, wait_watchdog_safeop)
 from pdo_map import PdoEntry, PdoMap, get_bits, read_pdo_map, sdo_u, set_bits  # noqa: F401
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem not installed (scripts/setup.sh)")
@@ -192,7 +193,10 @@ class Rackcat:
 
     def _while_cycling(self, master, fn, *args):
         # In OP the SM watchdog expires after 100 ms without frames; a control request may
-        # take longer, so the master keeps exchanging process data meanwhile.
+        # take longer, so the master keeps exchanging process data meanwhile. Starting the
+        # thread and curl can still stall this process for ~100 ms under load (measured at
+        # load 17): a test that needs the watchdog not to expire meanwhile sets it to seconds
+        # (0x0420, test_master_loss.py).
         with concurrent.futures.ThreadPoolExecutor(1) as pool:
             future = pool.submit(fn, *args)
             while not future.done():

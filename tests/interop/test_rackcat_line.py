@@ -52,9 +52,11 @@ def test_fixture_line_reaches_op_and_control_api_acts(rackcat_line):
                    for m in messages), messages
     finally:
         master.close()
-    time.sleep(0.1)
-    assert "RIM 2 ONLINE -> OFFLINE" in rackcat_line.log()
-    assert "ESM SAFEOP -> OP" in rackcat_line.log()
+    # The log is written by rackcat's logging thread: wait for it, generously.
+    deadline = time.monotonic() + 5
+    while not all(x in rackcat_line.log() for x in ("RIM 2 ONLINE -> OFFLINE", "ESM SAFEOP -> OP")):
+        assert time.monotonic() < deadline, rackcat_line.log()
+        time.sleep(0.05)
 
 
 def test_control_errors_are_exceptions_with_the_api_reason(rackcat_line):

@@ -13,7 +13,8 @@ import re
 import struct
 import time
 
-from rackcat_helpers import cycle, go, open_master, pysoem, rackcat, store_parameters, to_op
+from rackcat_helpers import (cycle, go, open_master, pysoem, rackcat, store_parameters, to_op,
+                             wait_watchdog_safeop)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -55,8 +56,7 @@ def drive(rc):
             cycle(master)
             time.sleep(0.001)
         # The master stops: the SM2 watchdog (100 ms by default) expires.
-        time.sleep(0.4)
-        master.read_state()
+        wait_watchdog_safeop(master)
         assert s.state == pysoem.SAFEOP_STATE | 0x10, hex(s.state)
         assert s.al_status == 0x001B, hex(s.al_status)
     finally:

@@ -9,7 +9,8 @@ import time
 
 from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, EXCEPTION_RESET, UART_MODULE,
                              check_capture, cycle, get_bits, go, open_master, pysoem, rackcat,
-                             read_pdo_map, run_cycles, set_bits, to_op, wait_loopback)
+                             read_pdo_map, run_cycles, set_bits, to_op, wait_loopback,
+                             wait_watchdog_safeop)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -244,8 +245,7 @@ def test_sm_watchdog_in_op_drops_to_safeop_with_safe_outputs_and_emergency(rackc
         master.config_map()
         to_op(master)
         assert wait_loopback(master, do, di, 0xFFFF) == 0xFFFF
-        time.sleep(0.5)  # no frames: five watchdog periods
-        master.read_state()
+        wait_watchdog_safeop(master)  # no frames: the SM2 watchdog (100 ms) expires
         assert s.state == pysoem.SAFEOP_STATE | pysoem.STATE_ERROR, hex(s.state)
         assert s.al_status == 0x001B, hex(s.al_status)
         run_cycles(master, 20)

@@ -11,11 +11,11 @@ substitute value, 0x4nnC input substitute status. Reaction codes: 0 zeros, 1 one
 0x8000 the guide's own rule (default).
 """
 import struct
-import time
 
 from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, abort_code, cycle, get_bits, go,
                              pysoem, rack_with_master, rackcat, read_pdo_map,
-                             ride_through_rim_loss, run_cycles, set_bits, to_op, wait_loopback)
+                             ride_through_rim_loss, run_cycles, set_bits, to_op, wait_loopback,
+                             wait_watchdog_safeop)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -109,8 +109,7 @@ def test_output_reactions_after_the_sm_watchdog(rackcat):
         to_op(master)
         set_guide_values(master)
         drive(master, do, di, ao, ai)
-        time.sleep(0.5)  # no frames: the SM2 watchdog (100 ms) expires
-        master.read_state()
+        wait_watchdog_safeop(master)  # no frames: the SM2 watchdog (100 ms) expires
         assert s.state == pysoem.SAFEOP_STATE | pysoem.STATE_ERROR, hex(s.state)
         assert s.al_status == 0x001B, hex(s.al_status)
         check_substituted(master, di, ai)

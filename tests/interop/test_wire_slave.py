@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from conftest import TEST_SLAVE_CMD, proc_status, tshark_problems
+from conftest import TEST_SLAVE_CMD, proc_status, tshark_problems, wait_watchdog_safeop
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem not installed (scripts/setup.sh)")
 
@@ -234,9 +234,7 @@ def test_process_data_watchdog_expires_without_frames(ecat_segment, mode):
             master.send_processdata()
             master.receive_processdata(RECEIVE_TIMEOUT_US)
             time.sleep(CYCLE_S)
-        time.sleep(0.5)  # silence on the wire: five watchdog periods
-        master.read_state()
-        s = master.slaves[0]
+        s = wait_watchdog_safeop(master)  # silence on the wire: the watchdog (100 ms) expires
         assert s.state == pysoem.SAFEOP_STATE | pysoem.STATE_ERROR, hex(s.state)
         assert s.al_status == 0x001B, hex(s.al_status)
         # Acknowledge, then back to INIT.
