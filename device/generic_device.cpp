@@ -114,10 +114,7 @@ void GenericDevice::add_mailbox_protocols(ecat::MailboxServer& server) {
 mailbox::Answer GenericDevice::FoeMailbox::on_request(const ecat::MailboxRequest& request,
                                                       std::span<uint8_t> reply) {
   // The FoE part of the mailbox data (ETG.1000.6 §5.8); the firmware frames the reply.
-  if (reply.size() < foe::FoeHeader::kSize) return {0, mailbox::Error::NoMoreMemory};
-  const auto r = device.foe_->handle(request.data, request.capacity, reply);
-  if (r.too_short) return {0, mailbox::Error::SizeTooShort};
-  return {r.length, mailbox::Error::None};
+  return device.foe_->handle_mailbox(request.data, request.capacity, reply);
 }
 
 size_t GenericDevice::FoeMailbox::poll(std::span<uint8_t> reply) {

@@ -20,6 +20,14 @@ uint64_t steady_ms() {
 FoeServer::FoeServer(FileBackend& backend, FoeLimits limits, Clock clock)
     : backend_(backend), limits_(limits), clock_(clock ? std::move(clock) : Clock(steady_ms)) {}
 
+mailbox::Answer FoeServer::handle_mailbox(std::span<const uint8_t> request, size_t request_capacity,
+                                          std::span<uint8_t> reply) {
+  if (reply.size() < FoeHeader::kSize) return {0, mailbox::Error::NoMoreMemory};
+  const Result r = handle(request, request_capacity, reply);
+  if (r.too_short) return {0, mailbox::Error::SizeTooShort};
+  return {r.length, mailbox::Error::None};
+}
+
 FoeServer::Result FoeServer::handle(std::span<const uint8_t> request, size_t request_capacity,
                                     std::span<uint8_t> reply) {
   // A transfer idle past its timeout is gone before this request is looked at.

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "base/mailbox_error.hpp"
 #include "foe/file_backend.hpp"
 #include "foe/foe_error.hpp"
 #include "foe/foe_header.hpp"
@@ -56,6 +57,11 @@ class FoeServer {
   // minus the mailbox header), which sets the data size of reads.
   Result handle(std::span<const uint8_t> request, size_t request_capacity,
                 std::span<uint8_t> reply);
+  // handle() as a device's FoE mailbox protocol answers (ecat::MailboxProtocol::on_request):
+  // a send mailbox too small for an FoE header is mailbox error 0x0007, a request shorter than
+  // one 0x0006 (ETG.1000.6 §5.2.3 Table 29); otherwise the reply's length.
+  mailbox::Answer handle_mailbox(std::span<const uint8_t> request, size_t request_capacity,
+                                 std::span<uint8_t> reply);
 
   // Drops a transfer idle past its timeout and drives a finished commit to its end. Call now
   // and then (the mailbox poll).

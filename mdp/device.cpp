@@ -522,10 +522,7 @@ size_t Device::coe_poll(std::span<uint8_t> reply) {
 
 mailbox::Answer Device::foe_request(std::span<const uint8_t> request, size_t capacity,
                                     std::span<uint8_t> reply) {
-  if (reply.size() < foe::FoeHeader::kSize) return {0, mailbox::Error::NoMoreMemory};
-  const auto r = impl_->foe->handle(request, capacity, reply);
-  if (r.too_short) return {0, mailbox::Error::SizeTooShort};
-  return {r.length, mailbox::Error::None};
+  return impl_->foe->handle_mailbox(request, capacity, reply);
 }
 
 size_t Device::foe_poll(std::span<uint8_t> reply) {

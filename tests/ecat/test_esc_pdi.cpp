@@ -6,42 +6,13 @@
 
 #include <vector>
 
-#include "base/little_endian.hpp"
 #include "ecat/esc/esc.hpp"
-#include "ecat/frame.hpp"
-#include "tests/ecat/test_application.hpp"
+#include "tests/ecat/chip_master.hpp"
 
 namespace rackcat::ecat::test {
 namespace {
 
-struct Eeprom final : SiiEeprom {
-  std::span<const uint8_t> image() const override { return sii; }
-  std::vector<uint8_t> sii = make_test_sii();
-};
-
-struct ChipTest : ::testing::Test {
-  ChipTest() : esc(eeprom, clock) {}
-
-  // One datagram through the ESC as the master sends it; returns {data, wkc}.
-  std::pair<std::vector<uint8_t>, uint16_t> datagram(Command cmd, uint16_t adp, uint16_t ado,
-                                                     std::vector<uint8_t> data) {
-    std::vector<uint8_t> d(kDatagramHeaderSize + data.size() + kWorkingCounterSize, 0);
-    d[0] = static_cast<uint8_t>(cmd);
-    le::put16(&d[2], adp);
-    le::put16(&d[4], ado);
-    le::put16(&d[6], static_cast<uint16_t>(data.size()));
-    std::copy(data.begin(), data.end(), d.begin() + kDatagramHeaderSize);
-    esc.begin_frame({clock.now_ns(), clock.now_ns()});
-    esc.process_datagram(d.data(), static_cast<uint16_t>(data.size()));
-    return {std::vector<uint8_t>(d.begin() + kDatagramHeaderSize, d.end() - 2),
-            le::get16(&d[d.size() - 2])};
-  }
-  uint16_t apwr(uint16_t ado, std::vector<uint8_t> data) {
-    return datagram(Command::Apwr, 0, ado, std::move(data)).second;
-  }
-  std::pair<std::vector<uint8_t>, uint16_t> aprd(uint16_t ado, uint16_t len) {
-    return datagram(Command::Aprd, 0, ado, std::vector<uint8_t>(len, 0));
-  }
+struct ChipTest : ::testing::Test, ChipMaster {
   uint32_t al_events() const { return esc.read32(0x0220); }
   uint8_t pdi8(uint16_t a) {
     uint8_t v = 0;
@@ -49,20 +20,6 @@ struct ChipTest : ::testing::Test {
     return v;
   }
   void pdi_write8(uint16_t a, uint8_t v) { esc.pdi_write(a, &v, 1); }
-  // SM n configured and enabled by the master; the PDI activates it (0x0807 bit 0 = 0).
-  void sm(int n, uint16_t start, uint16_t len, uint8_t control) {
-    std::vector<uint8_t> r(8, 0);
-    le::put16(&r[0], start);
-    le::put16(&r[2], len);
-    r[4] = control;
-    r[6] = 0x01;
-    apwr(static_cast<uint16_t>(0x0800 + 8 * n), r);
-    pdi_write8(static_cast<uint16_t>(0x0807 + 8 * n), 0x00);
-  }
-
-  ManualClock clock;
-  Eeprom eeprom;
-  Esc esc;
 };
 
 TEST_F(ChipTest, ResetStateIsInitWithEverySmDeactivatedForThePdi) {

@@ -8,20 +8,16 @@
 #include "ecat/esc/esc_pdi.hpp"
 #include "ecat/esc/lan9252_model.hpp"
 #include "ecat/lan9252/lan9252_pdi.hpp"
+#include "tests/ecat/chip_master.hpp"
 #include "tests/ecat/test_master.hpp"
 
 namespace rackcat::ecat::test {
 namespace {
 
-struct Eeprom final : SiiEeprom {
-  std::span<const uint8_t> image() const override { return sii; }
-  std::vector<uint8_t> sii = make_test_sii();
-};
-
 struct Lan9252Test : ::testing::Test {
   Lan9252Test() : esc(eeprom, clock), model(esc), port(model), direct(esc) {}
   ManualClock clock;
-  Eeprom eeprom;
+  TestEeprom eeprom;
   Esc esc;
   Lan9252Model model;
   Lan9252Pdi port;

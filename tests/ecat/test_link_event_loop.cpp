@@ -55,6 +55,17 @@ size_t answer(std::span<uint8_t> frame) {
   return frame.size();
 }
 
+// The master's side of one exchange on lo: sends a test frame tagged `tag` and waits for the
+// loop's answer to it (tag + 1); returns the answer, empty when none came.
+std::vector<uint8_t> exchange(RawSocketLink& master_link, uint8_t tag) {
+  auto frame = testutil::ethercat_frame(tag);
+  stamp(frame);
+  master_link.send(frame);
+  return testutil::receive_matching(master_link, [tag](std::span<const uint8_t> f) {
+    return ours(f) && (f[6] & 0x02) && f[testutil::kFirstDataByte] == tag + 1;
+  });
+}
+
 TEST_P(LinkEventLoop, AnswersFramesInPlaceAndRecordsBothDirections) {
   const std::string pcap_path =
       ::testing::TempDir() + "rackcat_loop_" + std::to_string(getpid()) + ".pcap";
@@ -66,12 +77,7 @@ TEST_P(LinkEventLoop, AnswersFramesInPlaceAndRecordsBothDirections) {
   std::vector<uint8_t> reply;
   std::thread master([&] {
     RawSocketLink master_link("lo");
-    auto frame = testutil::ethercat_frame(0x50);
-    stamp(frame);
-    master_link.send(frame);
-    reply = testutil::receive_matching(master_link, [](std::span<const uint8_t> f) {
-      return ours(f) && (f[6] & 0x02) && f[testutil::kFirstDataByte] == 0x51;
-    });
+    reply = exchange(master_link, 0x50);
     loop.stop();
   });
   EXPECT_EQ(loop.run(), 0);
@@ -223,13 +229,7 @@ TEST_P(LinkEventLoop, AfterFrameWorkYieldsToAWaitingFrame) {
   std::thread master([&] {
     RawSocketLink master_link("lo");
     for (uint8_t tag : {0x20, 0x30}) {
-      auto frame = testutil::ethercat_frame(tag);
-      stamp(frame);
-      master_link.send(frame);
-      const auto reply = testutil::receive_matching(master_link, [tag](std::span<const uint8_t> f) {
-        return ours(f) && (f[6] & 0x02) && f[testutil::kFirstDataByte] == tag + 1;
-      });
-      if (!reply.empty()) replies.fetch_add(1);
+      if (!exchange(master_link, tag).empty()) replies.fetch_add(1);
     }
     loop.post([&] { loop.stop(); });
   });
@@ -267,13 +267,7 @@ TEST_P(LinkEventLoop, AfterFrameWorkOutsideTheYieldWindowFinishesFirst) {
   std::thread master([&] {
     RawSocketLink master_link("lo");
     for (uint8_t tag : {0x30, 0x40}) {
-      auto frame = testutil::ethercat_frame(tag);
-      stamp(frame);
-      master_link.send(frame);
-      const auto reply = testutil::receive_matching(master_link, [tag](std::span<const uint8_t> f) {
-        return ours(f) && (f[6] & 0x02) && f[testutil::kFirstDataByte] == tag + 1;
-      });
-      if (!reply.empty()) replies.fetch_add(1);
+      if (!exchange(master_link, tag).empty()) replies.fetch_add(1);
     }
     loop.post([&] { loop.stop(); });
   });
@@ -334,13 +328,7 @@ TEST(LinkEventLoopSpin, BurstTimerPostAndStopInsideTheWindowAfterAFrame) {
   std::thread master([&] {
     RawSocketLink master_link("lo");
     for (uint8_t tag = 0x10; tag < 0x10 + 2 * 5; tag += 2) {  // a burst of 5, like an SDO
-      auto frame = testutil::ethercat_frame(tag);
-      stamp(frame);
-      master_link.send(frame);
-      const auto reply = testutil::receive_matching(master_link, [tag](std::span<const uint8_t> f) {
-        return ours(f) && (f[6] & 0x02) && f[testutil::kFirstDataByte] == tag + 1;
-      });
-      if (!reply.empty()) replies.fetch_add(1);
+      if (!exchange(master_link, tag).empty()) replies.fetch_add(1);
     }
     // Still inside the window: posted work runs and stop() ends the loop.
     loop.post([&] {

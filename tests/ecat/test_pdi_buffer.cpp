@@ -13,12 +13,10 @@
 #include <memory>
 #include <vector>
 
-#include "base/little_endian.hpp"
 #include "ecat/esc/esc_pdi.hpp"
 #include "ecat/esc/lan9252_model.hpp"
-#include "ecat/frame.hpp"
 #include "ecat/lan9252/lan9252_pdi.hpp"
-#include "tests/ecat/test_application.hpp"
+#include "tests/ecat/chip_master.hpp"
 
 namespace rackcat::ecat::test {
 namespace {
@@ -40,49 +38,15 @@ constexpr uint16_t kInLen = 5;
 constexpr uint8_t kWritten = 0x01, kRead = 0x02, kFull = 0x08, kBufferBits = 0x30;
 constexpr uint8_t kReadOpen = 0x40, kWriteOpen = 0x80;
 
-struct Eeprom final : SiiEeprom {
-  std::span<const uint8_t> image() const override { return sii; }
-  std::vector<uint8_t> sii = make_test_sii();
-};
-
 // One chip, its SyncManagers 0-3 configured by the master and activated by the PDI.
-struct Chip {
-  Chip() : esc(eeprom, clock) {
+struct Chip : ChipMaster {
+  Chip() {
     sm(0, kSm0, kMbxLen, kMbxOutControl);
     sm(1, kSm1, kMbxLen, kMbxInControl);
     sm(2, kSm2, kOutLen, kOutputsControl);
     sm(3, kSm3, kInLen, kInputsControl);
   }
 
-  // One datagram through the ESC as the master sends it; returns {data, wkc}.
-  std::pair<std::vector<uint8_t>, uint16_t> datagram(Command cmd, uint16_t ado,
-                                                     std::vector<uint8_t> data) {
-    std::vector<uint8_t> d(kDatagramHeaderSize + data.size() + kWorkingCounterSize, 0);
-    d[0] = static_cast<uint8_t>(cmd);
-    le::put16(&d[4], ado);
-    le::put16(&d[6], static_cast<uint16_t>(data.size()));
-    std::copy(data.begin(), data.end(), d.begin() + kDatagramHeaderSize);
-    esc.begin_frame({clock.now_ns(), clock.now_ns()});
-    esc.process_datagram(d.data(), static_cast<uint16_t>(data.size()));
-    return {std::vector<uint8_t>(d.begin() + kDatagramHeaderSize, d.end() - 2),
-            le::get16(&d[d.size() - 2])};
-  }
-  uint16_t apwr(uint16_t ado, std::vector<uint8_t> data) {
-    return datagram(Command::Apwr, ado, std::move(data)).second;
-  }
-  std::pair<std::vector<uint8_t>, uint16_t> aprd(uint16_t ado, uint16_t len) {
-    return datagram(Command::Aprd, ado, std::vector<uint8_t>(len, 0));
-  }
-  void sm(int n, uint16_t start, uint16_t len, uint8_t control) {
-    std::vector<uint8_t> r(8, 0);
-    le::put16(&r[0], start);
-    le::put16(&r[2], len);
-    r[4] = control;
-    r[6] = 0x01;
-    apwr(static_cast<uint16_t>(0x0800 + 8 * n), r);
-    const uint8_t activate = 0x00;
-    esc.pdi_write(static_cast<uint16_t>(0x0807 + 8 * n), &activate, 1);
-  }
   uint8_t status(int n) const { return esc.read8(static_cast<uint16_t>(0x0805 + 8 * n)); }
   uint32_t al_events() const { return esc.read32(0x0220); }
   // What the chip shows after an access: SM registers, AL and ECAT event requests.
@@ -93,10 +57,6 @@ struct Chip {
     for (uint16_t a = 0x0210; a < 0x0212; ++a) s.push_back(esc.read8(a));
     return s;
   }
-
-  ManualClock clock;
-  Eeprom eeprom;
-  Esc esc;
 };
 
 std::vector<uint8_t> pattern(size_t n, uint8_t seed) {

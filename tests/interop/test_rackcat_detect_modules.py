@@ -52,9 +52,7 @@ def test_scan_with_a_rim_offline_then_op_from_scratch(rackcat):
 
 
 def test_device_reset_with_a_rim_offline_then_op_from_scratch(rackcat):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         ride_through_rim_loss(s)
         assert store_parameters(s) == 0  # Override 0 survives the reset
@@ -66,6 +64,3 @@ def test_device_reset_with_a_rim_offline_then_op_from_scratch(rackcat):
         s.add_emergency_callback(lambda e: None)
         check_consistent(s, RIM1_MODULES)
         reach_op(master)
-    finally:
-        master.close()
-    rc.stop()

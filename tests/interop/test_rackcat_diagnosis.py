@@ -13,8 +13,8 @@ parameter a u16 data type (ETG.1000.6 index) and the value.
 import struct
 import time
 
-from rackcat_helpers import (abort_code, cycle, go, open_master, pysoem, rackcat, read_pdo_map,
-                             get_bits, run_cycles, to_op)
+from rackcat_helpers import (abort_code, go, pysoem, rack_with_master, rackcat,
+                             read_pdo_map, get_bits, run_cycles, to_op)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -90,9 +90,7 @@ def wait_for(master, rc, predicate, timeout_s=3.0):
 
 
 def test_fault_classes_in_the_history_with_dc_time(rackcat):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         # Process data: one RxPDO (the DO card) and the diagnosis TxPDO (New Messages
         # Available, 1 bit + 7 padding), assigned in PREOP.
@@ -180,9 +178,6 @@ def test_fault_classes_in_the_history_with_dc_time(rackcat):
         assert times == sorted(times), times
         assert times[0] > 0
         go(master, pysoem.INIT_STATE)
-    finally:
-        master.close()
-    rc.stop()
 
 
 def toggle_sensor(rc, n):
@@ -192,9 +187,7 @@ def toggle_sensor(rc, n):
 
 
 def test_acknowledge_clear_and_overflow(rackcat):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         s.add_emergency_callback(lambda e: None)
         s.sdo_write(DIAG, 3, b"\x00")  # clear (overwrite mode: every message)
@@ -245,6 +238,3 @@ def test_acknowledge_clear_and_overflow(rackcat):
         text = rc.cli("diag", text=True)
         assert "line break removed" in text and "overwrite mode" in text, text
         go(master, pysoem.INIT_STATE)
-    finally:
-        master.close()
-    rc.stop()

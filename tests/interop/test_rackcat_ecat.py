@@ -9,7 +9,7 @@ import time
 
 from rackcat_helpers import (CYCLE_S, DI_LOOPBACK_MODULE, DO_MODULE, abort_code,
                              check_capture, cycle, get_bits, go, open_master, pysoem, rackcat,
-                             read_pdo_map, set_bits, sii_image, to_op)
+                             rack_with_master, read_pdo_map, set_bits, sii_image, to_op)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -32,9 +32,7 @@ def assign_bytes(base, modules):
 
 
 def test_identity_sdo_complete_access_and_aborts(rackcat, tmp_path):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         assert s.state == pysoem.PREOP_STATE
         # The identity SOEM read from the SII equals 0x1018 read over SDO and the rack file.
@@ -67,9 +65,6 @@ def test_identity_sdo_complete_access_and_aborts(rackcat, tmp_path):
         # The server is still answering normally after the aborts.
         assert struct.unpack("<I", s.sdo_read(0x1018, 2))[0] == PRODUCT
         go(master, pysoem.INIT_STATE)
-    finally:
-        master.close()
-    rc.stop()
     check_capture(rc.pcap)
 
 

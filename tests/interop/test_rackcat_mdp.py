@@ -5,7 +5,8 @@ that survives a restart of `rackcat run` with the same --state-dir.
 import struct
 
 from rackcat_helpers import (DEFAULT_MODULES, abort_code, device_reset, go, open_master, pysoem,
-                             run_command, rackcat, run_cycles, store_parameters, to_op)
+                             rack_with_master, run_command, rackcat, run_cycles,
+                             store_parameters, to_op)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -31,9 +32,7 @@ def module_list(slave, index):
 
 
 def test_device_and_module_information(rackcat):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         assert text(s, 0x2000, 1) == "FI-CM0100-00"  # part number, rack file
         assert text(s, 0x2000, 3) == "FI-CM0100-00-0001"
@@ -67,9 +66,6 @@ def test_device_and_module_information(rackcat):
         # A module number beyond the rack has no information object.
         assert abort_code(s.sdo_read, 0x3000 + DEFAULT_MODULES * 0x10 + 1, 1) == 0x06020000
         go(master, pysoem.INIT_STATE)
-    finally:
-        master.close()
-    rc.stop()
 
 
 
@@ -130,9 +126,7 @@ def test_detect_modules_after_rim_loss_and_configured_list(rackcat):
     follows it (mdp/module_enumeration.hpp), so PREOP -> SAFEOP is accepted;
     after the replug and a new scan all 27 again. A configured list that contradicts the
     detected one is refused (0x06090033 over SDO; AL 0x0070 on PREOP -> SAFEOP, ETG.5001.1)."""
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         emergencies = []
         s.add_emergency_callback(emergencies.append)
@@ -163,18 +157,13 @@ def test_detect_modules_after_rim_loss_and_configured_list(rackcat):
         s = request_safeop(master)
         assert s.state == pysoem.SAFEOP_STATE, (hex(s.state), hex(s.al_status))
         go(master, pysoem.INIT_STATE)
-    finally:
-        master.close()
-    rc.stop()
 
 
 def test_device_reset_command_restarts_the_slave_in_init(rackcat):
     """0xFBF0 "teser\\0" (device reset, docs/MDP.md): the master gets its SDO answer, then the
     slave is back in INIT without an error, and a new scan takes it to PREOP again; a
     parameter written but not stored is back at its power-on value."""
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         s.sdo_write(0x2000, 4, b"10.1.2.3")  # written, not stored
         device_reset(master, s)  # INIT: no error flag
@@ -182,6 +171,3 @@ def test_device_reset_command_restarts_the_slave_in_init(rackcat):
         assert master.config_init() == 1
         assert master.state_check(pysoem.PREOP_STATE, 2_000_000) == pysoem.PREOP_STATE
         assert text(master.slaves[0], 0x2000, 4) == "192.168.9.50"
-    finally:
-        master.close()
-    rc.stop()

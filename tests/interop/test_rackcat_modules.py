@@ -9,7 +9,8 @@ import time
 
 from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, EXCEPTION_RESET, UART_MODULE,
                              check_capture, cycle, get_bits, go, open_master, pysoem, rackcat,
-                             read_pdo_map, run_cycles, set_bits, to_op, wait_loopback,
+                             rack_with_master, read_pdo_map, run_cycles, set_bits, to_op,
+                             wait_loopback,
                              wait_watchdog_safeop)
 
 assert rackcat  # the fixture, imported for pytest
@@ -21,9 +22,7 @@ def u32(slave, index, sub):
 
 
 def test_outputs_loop_back_and_take_safe_state_leaving_op(rackcat):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         pdo = read_pdo_map(s)
         do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
@@ -56,14 +55,18 @@ def test_outputs_loop_back_and_take_safe_state_leaving_op(rackcat):
         run_cycles(master, 50)
         assert get_bits(s.input, di) == 0x00F5
         go(master, pysoem.INIT_STATE)
-    finally:
-        master.close()
-    rc.stop()
 
 
 class Emergencies:
     def __init__(self):
         self.seen = []
+
+    @classmethod
+    def on(cls, slave):
+        """A new record of the emergencies `slave` sends from now on."""
+        emcy = cls()
+        slave.add_emergency_callback(emcy)
+        return emcy
 
     def __call__(self, emcy):
         self.seen.append((emcy.error_code, emcy.error_reg, emcy.b1, emcy.w1, emcy.w2))
@@ -81,12 +84,9 @@ class Emergencies:
 
 
 def test_rim_unplug_exception_tree_emergency_and_reset(rackcat):
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
-        emcy = Emergencies()
-        s.add_emergency_callback(emcy)
+        emcy = Emergencies.on(s)
         rim2 = 0x2021  # 0x2rr1, rr = 2
         # All online: RIM state bits 1..0 = 2 (ONLINE, guide Table 16), nothing active.
         assert u32(s, rim2, 8) == 0x00000002
@@ -123,9 +123,6 @@ def test_rim_unplug_exception_tree_emergency_and_reset(rackcat):
         tree = rc.cli("exceptions")
         assert tree["F380"] == "0x00000000" and tree["F390"] == "0x00000000", tree
         go(master, pysoem.INIT_STATE)
-    finally:
-        master.close()
-    rc.stop()
     # Wireshark decodes the emergency mailbox messages like every other frame.
     check_capture(rc.pcap)
 
@@ -195,12 +192,9 @@ def test_rim_lost_in_op_with_detect_modules_override_0_goes_to_safeop(rackcat):
     """Guide Table 23, Detect Modules Override 0: a RIM with mapped process data going offline
     in OP takes the device to SAFEOP (error flag, AL status code 0x0070) and every output to
     its safe state; the master also gets the module-missing emergency."""
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
-        emcy = Emergencies()
-        s.add_emergency_callback(emcy)
+        emcy = Emergencies.on(s)
         s.sdo_write(0x2000, 0x0B, b"\x00")  # Detect Modules Override = 0 (PREOP)
         pdo = read_pdo_map(s)
         do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
@@ -224,21 +218,15 @@ def test_rim_lost_in_op_with_detect_modules_override_0_goes_to_safeop(rackcat):
         missing = emcy.wait(s, 0xA001)
         assert missing[0][2] == 2, missing
         ack_error_and_init(master, pysoem.SAFEOP_STATE)
-    finally:
-        master.close()
-    rc.stop()
 
 
 def test_sm_watchdog_in_op_drops_to_safeop_with_safe_outputs_and_emergency(rackcat):
     """The master stops sending process data in OP: after the SM2 watchdog (100 ms default)
     the device is in SAFEOP with the error flag and AL status code 0x001B, the outputs are in
     their safe state, and a 0x8110 emergency (process-data timeout) is queued."""
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
-        emcy = Emergencies()
-        s.add_emergency_callback(emcy)
+        emcy = Emergencies.on(s)
         pdo = read_pdo_map(s)
         do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
         di = pdo.find(0x6000 + (DI_LOOPBACK_MODULE - 1) * 0x10, 1, "in")
@@ -252,9 +240,6 @@ def test_sm_watchdog_in_op_drops_to_safeop_with_safe_outputs_and_emergency(rackc
         assert get_bits(s.input, di) == 0, "outputs not in their safe state after the watchdog"
         emcy.wait(s, 0x8110)
         ack_error_and_init(master, pysoem.SAFEOP_STATE)
-    finally:
-        master.close()
-    rc.stop()
 
 
 def test_uart_bytes_written_by_the_master_leave_on_the_pty(rackcat):
@@ -289,9 +274,7 @@ def test_analog_loopback_and_thermocouple_reading(rackcat):
     input with the same 16-bit code (both cards -10..10 V, docs/MODULES.md scaling), and a
     thermocouple channel set through `rackcat ctl set` reads its temperature at 0.1 degC per
     bit (NIST ITS-90 round trip within 0.06 degC)."""
-    rc = rackcat()
-    master = open_master(rc.iface, 1)
-    try:
+    with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         pdo = read_pdo_map(s)
         ao = [pdo.find(0x7000 + (11 - 1) * 0x10 + 2, k, "out") for k in range(1, 9)]  # CAO-15
@@ -321,6 +304,3 @@ def test_analog_loopback_and_thermocouple_reading(rackcat):
         assert abs(get_bits(s.input, tc) - 3500) <= 1, get_bits(s.input, tc)
         go(master, pysoem.SAFEOP_STATE)
         go(master, pysoem.INIT_STATE)
-    finally:
-        master.close()
-    rc.stop()
