@@ -885,6 +885,33 @@ fn report_loopback(checks: &[LoopbackCheck], r: &mut Report) {
     }
 }
 
+/// OP -> SAFE-OP -> PRE-OP -> INIT (ETG.1000.6 §5.3), with or without DC: each step's error
+/// names its transition.
+async fn op_to_init<const N: usize, const P: usize, DC>(
+    group: ethercrab::SubDeviceGroup<
+        N,
+        P,
+        ethercrab::DefaultLock,
+        ethercrab::subdevice_group::Op,
+        DC,
+    >,
+    md: &MainDevice<'_>,
+) -> Result<(), String> {
+    let group = group
+        .into_safe_op(md)
+        .await
+        .map_err(|e| format!("OP -> SAFE-OP: {e}"))?;
+    let group = group
+        .into_pre_op(md)
+        .await
+        .map_err(|e| format!("SAFE-OP -> PRE-OP: {e}"))?;
+    group
+        .into_init(md)
+        .await
+        .map_err(|e| format!("PRE-OP -> INIT: {e}"))?;
+    Ok(())
+}
+
 async fn wait_all_op<F, Fut>(mut exchange: F, what: &str) -> Result<Duration, String>
 where
     F: FnMut() -> Fut,
@@ -1154,18 +1181,7 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
         >| { Some(resp.extra.next_cycle_wait) };
         cycle_loop!(group, md, o, r, checks, expected_wkc, tx_rx_dc, dc_wait);
         report_loopback(&checks, r);
-        let group = group
-            .into_safe_op(md)
-            .await
-            .map_err(|e| format!("OP -> SAFE-OP: {e}"))?;
-        let group = group
-            .into_pre_op(md)
-            .await
-            .map_err(|e| format!("SAFE-OP -> PRE-OP: {e}"))?;
-        group
-            .into_init(md)
-            .await
-            .map_err(|e| format!("PRE-OP -> INIT: {e}"))?;
+        op_to_init(group, md).await?;
     } else {
         if o.sync0 {
             r.info("no SubDevice supports DC: SYNC0 not configured, free run");
@@ -1206,18 +1222,7 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
         let no_dc = |_: &ethercrab::TxRxResponse<MAX_SUBDEVICES>| None::<Duration>;
         cycle_loop!(group, md, o, r, checks, expected_wkc, tx_rx, no_dc);
         report_loopback(&checks, r);
-        let group = group
-            .into_safe_op(md)
-            .await
-            .map_err(|e| format!("OP -> SAFE-OP: {e}"))?;
-        let group = group
-            .into_pre_op(md)
-            .await
-            .map_err(|e| format!("SAFE-OP -> PRE-OP: {e}"))?;
-        group
-            .into_init(md)
-            .await
-            .map_err(|e| format!("PRE-OP -> INIT: {e}"))?;
+        op_to_init(group, md).await?;
     }
     check_states(md, &addrs, SubDeviceState::Init, r).await;
     r.pass("back to INIT");
