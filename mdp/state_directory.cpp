@@ -75,8 +75,7 @@ std::shared_ptr<StateDirectory> StateDirectory::child(const std::string& name) c
   auto unusable = [&](const std::string& why) {
     return std::shared_ptr<StateDirectory>(new StateDirectory(path, -1, why));
   };
-  if (!usable()) return unusable(problem_);
-  if (!single_component(name)) return unusable("not a single path component: " + path);
+  if (std::string problem = name_problem(name); !problem.empty()) return unusable(problem);
   if (::mkdirat(fd_, name.c_str(), 0700) != 0 && errno != EEXIST) {
     return unusable("cannot create " + path + ": " + reason(errno));
   }
@@ -92,17 +91,19 @@ std::shared_ptr<StateDirectory> StateDirectory::child(const std::string& name) c
   return std::shared_ptr<StateDirectory>(new StateDirectory(path, fd, {}));
 }
 
+std::string StateDirectory::name_problem(const std::string& name) const {
+  if (!usable()) return problem_.empty() ? "state directory " + path_ + " unusable" : problem_;
+  if (!single_component(name)) return "not a single path component: " + path_ + "/" + name;
+  return {};
+}
+
 StateDirectory::ReadResult StateDirectory::read(const std::string& name, size_t max_bytes,
                                                 std::vector<uint8_t>& out, std::string& why) const {
   out.clear();
   const std::string path = path_ + "/" + name;
-  if (!usable()) {
-    why = problem_;
-    return ReadResult::Missing;
-  }
-  if (!single_component(name)) {
-    why = "not a single path component: " + path;
-    return ReadResult::Refused;
+  if (std::string problem = name_problem(name); !problem.empty()) {
+    why = std::move(problem);
+    return usable() ? ReadResult::Refused : ReadResult::Missing;
   }
   const int fd =
       ::openat(fd_, name.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
@@ -152,12 +153,8 @@ bool StateDirectory::replace(const std::string& name, std::span<const uint8_t> b
   int ignored = 0;
   int& err = error_number != nullptr ? *error_number : ignored;
   err = 0;
-  if (!usable()) {
-    error = problem_;
-    return false;
-  }
-  if (!single_component(name)) {
-    error = "not a single path component: " + path;
+  if (std::string problem = name_problem(name); !problem.empty()) {
+    error = std::move(problem);
     return false;
   }
   const std::string tmp = name + ".tmp";
@@ -204,12 +201,8 @@ bool StateDirectory::replace(const std::string& name, std::span<const uint8_t> b
 
 bool StateDirectory::remove(const std::string& name, std::string& error) const {
   const std::string path = path_ + "/" + name;
-  if (!usable()) {
-    error = problem_;
-    return false;
-  }
-  if (!single_component(name)) {
-    error = "not a single path component: " + path;
+  if (std::string problem = name_problem(name); !problem.empty()) {
+    error = std::move(problem);
     return false;
   }
   if (::unlinkat(fd_, name.c_str(), 0) != 0) {

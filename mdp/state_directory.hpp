@@ -59,6 +59,9 @@ class StateDirectory {
 
  private:
   StateDirectory(std::string path, int fd, std::string problem);
+  // Why `name` cannot be used here: the directory is unusable, or `name` is not a single path
+  // component; empty when it can.
+  std::string name_problem(const std::string& name) const;
 
   std::string path_;
   int fd_ = -1;

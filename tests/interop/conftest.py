@@ -197,6 +197,17 @@ def proc_status(pid):
     return fields
 
 
+def go(master, state, timeout_us=3_000_000):
+    """Requests `state` of every slave (pysoem master) and waits for it; fails naming the
+    first slaves' AL status and code."""
+    master.state = state
+    master.write_state()
+    reached = master.state_check(state, timeout_us)
+    master.read_state()
+    detail = [(s.name, hex(s.state), hex(s.al_status)) for s in master.slaves[:4]]
+    assert reached == state, f"state {hex(state)} not reached: {detail}"
+
+
 SAFEOP_ERROR = 0x14  # AL status: SAFEOP with the error flag (ETG.1000.6 §5.3.2)
 
 

@@ -22,7 +22,7 @@ import time
 
 import pytest
 
-from conftest import (BUILD, SlaveProcess, VethNamespace, require_root,  # noqa: F401
+from conftest import (BUILD, SlaveProcess, VethNamespace, go, require_root,  # noqa: F401
                       tshark_problems, wait_watchdog_safeop)
 from pdo_map import PdoEntry, PdoMap, get_bits, read_pdo_map, sdo_u, set_bits  # noqa: F401
 
@@ -295,15 +295,6 @@ def device_reset(master, slave, timeout_s=3.0):
             break
         time.sleep(0.01)
     assert slave.state == pysoem.INIT_STATE, (hex(slave.state), hex(slave.al_status))
-
-
-def go(master, state, timeout_us=3_000_000):
-    master.state = state
-    master.write_state()
-    reached = master.state_check(state, timeout_us)
-    master.read_state()
-    detail = [(s.name, hex(s.state), hex(s.al_status)) for s in master.slaves[:4]]
-    assert reached == state, f"state {hex(state)} not reached: {detail}"
 
 
 def cycle(master):

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import BUILD, REPO
+from conftest import BUILD, REPO, go
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem not installed (scripts/setup.sh)")
 
@@ -23,14 +23,6 @@ def tiny_device(tmp_path_factory):
     exe = work / "tiny_device" / "tiny_device"
     assert exe.is_file()
     return exe
-
-
-def go(master, state, timeout_us=2_000_000):
-    master.state = state
-    master.write_state()
-    reached = master.state_check(state, timeout_us)
-    detail = [(s.name, hex(s.state), hex(s.al_status)) for s in master.slaves]
-    assert reached == state, f"state {hex(state)} not reached: {detail}"
 
 
 def test_installed_tiny_device_reaches_op(ecat_segment, tiny_device):

@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from conftest import TEST_SLAVE_CMD, proc_status, tshark_problems, wait_watchdog_safeop
+from conftest import TEST_SLAVE_CMD, go, proc_status, tshark_problems, wait_watchdog_safeop
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem not installed (scripts/setup.sh)")
 
@@ -41,14 +41,6 @@ def open_master(iface, expected_slaves):
     assert master.state_check(pysoem.PREOP_STATE, 2_000_000) == pysoem.PREOP_STATE
     master.read_state()
     return master
-
-
-def go(master, state, timeout_us=2_000_000):
-    master.state = state
-    master.write_state()
-    reached = master.state_check(state, timeout_us)
-    detail = [(s.name, hex(s.state), hex(s.al_status)) for s in master.slaves]
-    assert reached == state, f"state {hex(state)} not reached: {detail}"
 
 
 def to_op(master):
