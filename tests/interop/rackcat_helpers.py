@@ -349,6 +349,15 @@ def store_parameters(slave, timeout_s=5.0):
     return run_command(slave, 0xFBF2, STORE_SAVE, timeout_s)
 
 
+def loopback_entries(slave):
+    """The default rack's loopback pair in `slave`'s PDO map (read over SDO): the DO card's
+    output word (module DO_MODULE, 0x7nn0:01) and the entry of the DI card wired to it
+    (DI_LOOPBACK_MODULE, 0x6nn0:01), as (do, di) for set_bits/get_bits."""
+    pdo = read_pdo_map(slave)
+    return (pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out"),
+            pdo.find(0x6000 + (DI_LOOPBACK_MODULE - 1) * 0x10, 1, "in"))
+
+
 def wait_loopback(master, do, di, value, cycles=300):
     """Writes `value` to the DO card's entry `do` and cycles until the loopback-wired DI card's
     entry `di` shows it; returns what the DI card showed last."""

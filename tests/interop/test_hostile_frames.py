@@ -15,8 +15,8 @@ import socket
 import struct
 import time
 
-from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, go, open_master, pysoem, rackcat,
-                             read_pdo_map, to_op, wait_loopback)
+from rackcat_helpers import (go, loopback_entries, open_master, pysoem, rackcat, read_pdo_map,
+                             to_op, wait_loopback)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -152,9 +152,7 @@ def op_and_process_data(master):
     """The slave still reaches OP with pysoem and exchanges process data: a DO card's output
     word comes back on the DI card wired to it (the rack's loopback wiring)."""
     s = master.slaves[0]
-    pdo = read_pdo_map(s)
-    do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
-    di = pdo.find(0x6000 + (DI_LOOPBACK_MODULE - 1) * 0x10, 1, "in")
+    do, di = loopback_entries(s)
     master.config_map()
     to_op(master)
     for value in (0x5AA5, 0x0001, 0xFFFF, 0x0000):

@@ -28,9 +28,8 @@ import os
 import struct
 import time
 
-from rackcat_helpers import (CYCLE_S, DI_LOOPBACK_MODULE, DO_MODULE, DEFAULT_MODULES, cycle,
-                             get_bits, go, open_master, pysoem, rackcat, read_pdo_map, set_bits,
-                             to_op)
+from rackcat_helpers import (CYCLE_S, DO_MODULE, DEFAULT_MODULES, cycle, get_bits, go,
+                             loopback_entries, open_master, pysoem, rackcat, set_bits, to_op)
 from test_hostile_frames import (LRD, REG_AL_STATUS, REG_FMMU, REG_STATION, RawMaster, dgram,
                                  ecat_datagrams)
 
@@ -102,9 +101,7 @@ def test_master_loss_in_op_safeop_0x001b_safe_outputs_every_trial(rackcat):
     raw = RawMaster(rc.iface)
     try:
         s = master.slaves[0]
-        pdo = read_pdo_map(s)
-        do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
-        di = pdo.find(0x6000 + (DI_LOOPBACK_MODULE - 1) * 0x10, 1, "in")
+        do, di = loopback_entries(s)
         station = raw.reg16(REG_STATION)
         set_pd_watchdog(raw, station, QUERY_WATCHDOG_S)
         master.config_map()
@@ -174,9 +171,7 @@ def test_master_restarts_in_op_without_restarting_rackcat(rackcat):
 
     def op_with_loopback(master, value):
         s = master.slaves[0]
-        pdo = read_pdo_map(s)
-        do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
-        di = pdo.find(0x6000 + (DI_LOOPBACK_MODULE - 1) * 0x10, 1, "in")
+        do, di = loopback_entries(s)
         master.config_map()
         to_op(master)
         assert loop_until_loopback(master, do, di, value), f"no loopback of 0x{value:04X}"

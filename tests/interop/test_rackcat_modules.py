@@ -9,9 +9,8 @@ import time
 
 from rackcat_helpers import (DI_LOOPBACK_MODULE, DO_MODULE, EXCEPTION_RESET, UART_MODULE,
                              check_capture, cycle, get_bits, go, open_master, pysoem, rackcat,
-                             rack_with_master, read_pdo_map, run_cycles, set_bits, to_op,
-                             wait_loopback,
-                             wait_watchdog_safeop)
+                             loopback_entries, rack_with_master, read_pdo_map, run_cycles,
+                             set_bits, to_op, wait_loopback, wait_watchdog_safeop)
 
 assert rackcat  # the fixture, imported for pytest
 
@@ -24,9 +23,7 @@ def u32(slave, index, sub):
 def test_outputs_loop_back_and_take_safe_state_leaving_op(rackcat):
     with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
-        pdo = read_pdo_map(s)
-        do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
-        di = pdo.find(0x6000 + (DI_LOOPBACK_MODULE - 1) * 0x10, 1, "in")
+        do, di = loopback_entries(s)
         master.config_map()
         to_op(master)
         for value in (0x0001, 0x8000, 0xA5C3, 0xFFFF, 0x0000, 0xF0F0):
@@ -227,9 +224,7 @@ def test_sm_watchdog_in_op_drops_to_safeop_with_safe_outputs_and_emergency(rackc
     with rack_with_master(rackcat) as (rc, master):
         s = master.slaves[0]
         emcy = Emergencies.on(s)
-        pdo = read_pdo_map(s)
-        do = pdo.find(0x7000 + (DO_MODULE - 1) * 0x10, 1, "out")
-        di = pdo.find(0x6000 + (DI_LOOPBACK_MODULE - 1) * 0x10, 1, "in")
+        do, di = loopback_entries(s)
         master.config_map()
         to_op(master)
         assert wait_loopback(master, do, di, 0xFFFF) == 0xFFFF
