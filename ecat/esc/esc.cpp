@@ -215,8 +215,9 @@ uint8_t Esc::process_physical(uint8_t command, uint16_t address, uint8_t* data, 
 }
 
 bool Esc::physical_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge_or) {
-  if (!sm_allows_read(address, len)) return false;
   const uint32_t end = static_cast<uint32_t>(address) + len;
+  const uint16_t meeting = sm_meeting(address, end);
+  if (!sm_allows_read(meeting)) return false;
   const uint16_t reg_len =
       address < reg::kProcessRam
           ? static_cast<uint16_t>(std::min<uint32_t>(end, reg::kProcessRam) - address)
@@ -228,13 +229,14 @@ bool Esc::physical_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge
   } else {
     std::memcpy(dst, src, len);
   }
-  sm_after_read(address, len);
+  sm_after_read(meeting, address, len);
   if (reg_len != 0) after_register_read(address, reg_len);
   return true;
 }
 
 bool Esc::physical_write(uint16_t address, const uint8_t* src, uint16_t len) {
-  if (!sm_allows_write(address, len)) return false;
+  const uint16_t meeting = sm_meeting(address, static_cast<uint32_t>(address) + len);
+  if (!sm_allows_write(meeting)) return false;
   if (write_protection_active()) return protected_write(address, src, len);
   uint16_t done = 0;
   if (address < reg::kProcessRam) {
@@ -244,7 +246,9 @@ bool Esc::physical_write(uint16_t address, const uint8_t* src, uint16_t len) {
     after_register_write(address, src, done);
   }
   if (done < len) std::memcpy(&mem_[address + done], src + done, len - done);
-  sm_after_write(address, len);
+  // A register write may have (re)configured a SyncManager: look them up again then.
+  sm_after_write(done != 0 ? sm_meeting(address, static_cast<uint32_t>(address) + len) : meeting,
+                 address, len);
   return true;
 }
 

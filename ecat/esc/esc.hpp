@@ -213,10 +213,22 @@ class Esc {
   uint8_t process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len,
                           uint16_t fmmus);
   void or_irq(uint8_t* datagram) const;
-  bool fmmu_read(const FmmuState& f, uint64_t lo_bit, uint64_t hi_bit, uint64_t datagram_bit0,
-                 uint8_t* data);
-  bool fmmu_write(const FmmuState& f, uint64_t lo_bit, uint64_t hi_bit, uint64_t datagram_bit0,
-                  const uint8_t* data);
+  // One FMMU intersected with one logical datagram, computed once per datagram: logical bits
+  // lo..hi inside both, the bit shift onto physical memory and the physical bytes touched.
+  // No default member values: process_logical keeps 2 x 16 of them on the stack per datagram
+  // and fills only those an FMMU meets (intersect_fmmu sets every field when it succeeds).
+  struct FmmuSpan {
+    uint64_t lo;
+    uint64_t hi;
+    int64_t shift;  // physical bit = logical bit + shift
+    uint32_t phys_first;
+    uint32_t phys_len;
+  };
+  // Intersects FMMU `f` with the datagram's logical bits dg_lo..dg_hi; false when they do not
+  // meet or the physical side would run past the 64 KiB address space.
+  static bool intersect_fmmu(const FmmuState& f, uint64_t dg_lo, uint64_t dg_hi, FmmuSpan& out);
+  bool fmmu_read(const FmmuSpan& s, uint64_t datagram_bit0, uint8_t* data);
+  bool fmmu_write(const FmmuSpan& s, uint64_t datagram_bit0, const uint8_t* data);
   void reload_fmmu(int index);
   // sync_manager.cpp: buffer semantics.
   void reload_sm(int index);
@@ -224,6 +236,13 @@ class Esc {
   void sm_after_read(uint16_t address, uint16_t len);
   bool sm_allows_write(uint16_t address, uint16_t len);
   void sm_after_write(uint16_t address, uint16_t len);
+  // The same for an access whose enabled SyncManagers are already known (`meeting`, bit n =
+  // SM n, from sm_meeting): one lookup serves the check and the hand-over.
+  uint16_t sm_meeting(uint32_t address, uint32_t end) const;
+  bool sm_allows_read(uint16_t meeting);
+  void sm_after_read(uint16_t meeting, uint16_t address, uint16_t len);
+  bool sm_allows_write(uint16_t meeting);
+  void sm_after_write(uint16_t meeting, uint16_t address, uint16_t len);
   // An access to bytes [address, end) of SM n's buffer by the side that fills it (`filler`:
   // the master for an SM it writes, the PDI for one it reads) or by the side that drains it:
   // opens the buffer on its first byte, completes it on its last (status 0x0805+8n, events).

@@ -1,6 +1,7 @@
 // FMMUs: bit-granular mapping of the 4 GiB logical address space onto this ESC's physical
 // memory (ETG.1000.4 §6.6), and the logical datagrams LRD, LWR, LRW that use them.
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstring>
 
@@ -41,28 +42,20 @@ void merge_bits(uint8_t* to, const uint8_t* from, uint64_t lo, uint64_t hi) {
   merge(bytes - 1, last);
 }
 
-struct Span {
-  uint64_t lo = 0;          // first logical bit mapped and inside the datagram
-  uint64_t hi = 0;          // last one
-  int64_t shift = 0;        // physical bit = logical bit + shift
-  uint32_t phys_first = 0;  // physical bytes touched
-  uint32_t phys_len = 0;
-};
+}  // namespace
 
-// Intersects an FMMU with the datagram's logical bit range; false when they do not meet or
-// the physical side would run past the 64 KiB address space.
-bool intersect(uint32_t logical_start, uint16_t length, uint8_t start_bit, uint8_t stop_bit,
-               uint16_t physical_start, uint8_t physical_bit, uint64_t dg_lo, uint64_t dg_hi,
-               Span& out) {
-  if (length == 0) return false;
-  const uint64_t f_lo = static_cast<uint64_t>(logical_start) * 8 + start_bit;
-  const uint64_t f_hi = (static_cast<uint64_t>(logical_start) + length - 1) * 8 + stop_bit;
+bool Esc::intersect_fmmu(const FmmuState& f, uint64_t dg_lo, uint64_t dg_hi, FmmuSpan& out) {
+  if (f.length == 0) return false;
+  const uint64_t f_lo = static_cast<uint64_t>(f.logical_start) * 8 + f.logical_start_bit;
+  const uint64_t f_hi =
+      (static_cast<uint64_t>(f.logical_start) + f.length - 1) * 8 + f.logical_stop_bit;
   if (f_hi < f_lo) return false;
   out.lo = std::max(f_lo, dg_lo);
   out.hi = std::min(f_hi, dg_hi);
   if (out.lo > out.hi) return false;
-  out.shift = static_cast<int64_t>(static_cast<uint64_t>(physical_start) * 8 + physical_bit) -
-              static_cast<int64_t>(f_lo);
+  out.shift =
+      static_cast<int64_t>(static_cast<uint64_t>(f.physical_start) * 8 + f.physical_start_bit) -
+      static_cast<int64_t>(f_lo);
   const uint64_t p_lo = static_cast<uint64_t>(static_cast<int64_t>(out.lo) + out.shift);
   const uint64_t p_hi = static_cast<uint64_t>(static_cast<int64_t>(out.hi) + out.shift);
   if (p_hi / 8 >= reg::kAddressSpace) return false;
@@ -70,8 +63,6 @@ bool intersect(uint32_t logical_start, uint16_t length, uint8_t start_bit, uint8
   out.phys_len = static_cast<uint32_t>(p_hi / 8 - p_lo / 8 + 1);
   return true;
 }
-
-}  // namespace
 
 void Esc::reload_fmmu(int index) {
   const uint8_t* p = &mem_[reg::kFmmu + reg::kFmmuSize * index];
@@ -126,65 +117,61 @@ uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, u
   const uint64_t dg_lo = static_cast<uint64_t>(address) * 8;
   const uint64_t dg_hi = (static_cast<uint64_t>(address) + len) * 8 - 1;
 
-  // LRW reads the old memory into the datagram while writing the incoming data: keep the
-  // incoming bytes when this ESC both reads and writes inside the datagram.
-  bool any_read = false;
-  bool any_write = false;
+  // Each FMMU the command may use is intersected with the datagram once; the datagram bytes
+  // the reads fill and the writes take are tracked as two byte ranges (relative to data).
+  std::array<FmmuSpan, kFmmus> reads;   // NOLINT: filled up to read_count
+  std::array<FmmuSpan, kFmmus> writes;  // NOLINT: filled up to write_count
+  size_t read_count = 0;
+  size_t write_count = 0;
+  uint64_t read_first = UINT64_MAX;
+  uint64_t read_last = 0;
+  uint64_t write_first = UINT64_MAX;
+  uint64_t write_last = 0;
+  const uint64_t dg_byte0 = dg_lo / 8;
   for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const FmmuState& f = fmmu_[std::countr_zero(m)];
-    Span s;
-    if (!intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit,
-                   f.physical_start, f.physical_start_bit, dg_lo, dg_hi, s)) {
-      continue;
+    const bool r = may_read && (f.type & 0x01) != 0;
+    const bool w = may_write && (f.type & 0x02) != 0;
+    if (!r && !w) continue;
+    FmmuSpan s{};
+    if (!intersect_fmmu(f, dg_lo, dg_hi, s)) continue;
+    if (r) {
+      reads[read_count++] = s;
+      read_first = std::min(read_first, s.lo / 8 - dg_byte0);
+      read_last = std::max(read_last, s.hi / 8 - dg_byte0);
     }
-    any_read |= may_read && (f.type & 0x01);
-    any_write |= may_write && (f.type & 0x02);
+    if (w) {
+      writes[write_count++] = s;
+      write_first = std::min(write_first, s.lo / 8 - dg_byte0);
+      write_last = std::max(write_last, s.hi / 8 - dg_byte0);
+    }
   }
-  if (!any_read && !any_write) return 0;
+  if (read_count == 0 && write_count == 0) return 0;
+  // LRW reads the old memory into the datagram while writing the incoming data (ETG.1000.4
+  // §5.4.3): when the bytes the reads fill meet the bytes the writes take, the incoming ones
+  // are kept aside first (only those, at the same offsets).
   const uint8_t* incoming = data;
-  if (any_read && any_write) {
-    std::memcpy(scratch_.data(), data, len);
+  if (read_count != 0 && write_count != 0 && read_first <= write_last && write_first <= read_last) {
+    std::memcpy(scratch_.data() + write_first, data + write_first, write_last - write_first + 1);
     incoming = scratch_.data();
   }
 
   bool read_done = false;
   bool write_done = false;
-  if (any_read) {
-    for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
-      const FmmuState& f = fmmu_[std::countr_zero(m)];
-      if ((f.type & 0x01) == 0) continue;
-      Span s;
-      if (!intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit,
-                     f.physical_start, f.physical_start_bit, dg_lo, dg_hi, s)) {
-        continue;
-      }
-      read_done |= fmmu_read(f, s.lo, s.hi, dg_lo, data);
-    }
-  }
-  if (any_write) {
-    for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
-      const FmmuState& f = fmmu_[std::countr_zero(m)];
-      if ((f.type & 0x02) == 0) continue;
-      Span s;
-      if (!intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit,
-                     f.physical_start, f.physical_start_bit, dg_lo, dg_hi, s)) {
-        continue;
-      }
-      write_done |= fmmu_write(f, s.lo, s.hi, dg_lo, incoming);
-    }
-  }
+  for (size_t i = 0; i < read_count; ++i) read_done |= fmmu_read(reads[i], dg_lo, data);
+  for (size_t i = 0; i < write_count; ++i) write_done |= fmmu_write(writes[i], dg_lo, incoming);
   // ETG.1000.4 §5.4.4: LRD and LWR count 1 per slave; LRW counts 1 for a read, 2 for a write.
   if (cmd == Command::Lrw) return static_cast<uint8_t>((read_done ? 1 : 0) + (write_done ? 2 : 0));
   return (read_done || write_done) ? 1 : 0;
 }
 
-bool Esc::fmmu_read(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_lo, uint8_t* data) {
-  Span s;
-  intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit, f.physical_start,
-            f.physical_start_bit, lo, hi, s);
+bool Esc::fmmu_read(const FmmuSpan& s, uint64_t dg_lo, uint8_t* data) {
+  const uint64_t lo = s.lo;
+  const uint64_t hi = s.hi;
   const auto first = static_cast<uint16_t>(s.phys_first);
   const auto plen = static_cast<uint16_t>(s.phys_len);
-  if (!sm_allows_read(first, plen)) return false;
+  const uint16_t meeting = sm_meeting(first, s.phys_first + s.phys_len);
+  if (!sm_allows_read(meeting)) return false;
   const bool registers = first < reg::kProcessRam;
   const uint16_t reg_len =
       registers ? static_cast<uint16_t>(
@@ -202,24 +189,23 @@ bool Esc::fmmu_read(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_lo
       data[db / 8] = static_cast<uint8_t>((data[db / 8] & ~(1u << (db % 8))) | (v << (db % 8)));
     }
   }
-  sm_after_read(first, plen);
+  sm_after_read(meeting, first, plen);
   if (registers) after_register_read(first, reg_len);
   return true;
 }
 
-bool Esc::fmmu_write(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_lo,
-                     const uint8_t* data) {
-  Span s;
-  intersect(f.logical_start, f.length, f.logical_start_bit, f.logical_stop_bit, f.physical_start,
-            f.physical_start_bit, lo, hi, s);
+bool Esc::fmmu_write(const FmmuSpan& s, uint64_t dg_lo, const uint8_t* data) {
+  const uint64_t lo = s.lo;
+  const uint64_t hi = s.hi;
   const auto first = static_cast<uint16_t>(s.phys_first);
   const auto plen = static_cast<uint16_t>(s.phys_len);
-  if (!sm_allows_write(first, plen)) return false;
+  const uint16_t meeting = sm_meeting(first, s.phys_first + s.phys_len);
+  if (!sm_allows_write(meeting)) return false;
   if (write_protection_active() && !write_allowed(reg::kProcessRam)) return false;  // ESC-wide
   if (s.shift % 8 == 0 && s.phys_first >= reg::kProcessRam) {
     // Process RAM, byte-aligned (the usual process-data mapping): no register rules apply.
     merge_bits(&mem_[s.phys_first], &data[lo / 8 - dg_lo / 8], lo, hi);
-    sm_after_write(first, plen);
+    sm_after_write(meeting, first, plen);
     return true;
   }
   // Registers keep their write masks and side effects: merge into a copy of the current
@@ -262,7 +248,8 @@ bool Esc::fmmu_write(const FmmuState& f, uint64_t lo, uint64_t hi, uint64_t dg_l
     }
     p += n;
   }
-  sm_after_write(first, plen);
+  // The register path may have (re)configured a SyncManager: look them up again.
+  sm_after_write(sm_meeting(first, s.phys_first + s.phys_len), first, plen);
   return true;
 }
 

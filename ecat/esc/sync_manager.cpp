@@ -98,25 +98,41 @@ void Esc::reload_sm(int n) {
   update_sm_events(n);
 }
 
+uint16_t Esc::sm_meeting(uint32_t address, uint32_t end) const {
+  uint16_t meeting = 0;
+  for_each_sm_meeting(address, end,
+                      [&](int n) { meeting = static_cast<uint16_t>(meeting | (1u << n)); });
+  return meeting;
+}
+
 bool Esc::sm_allows_read(uint16_t address, uint16_t len) {
-  bool allowed = true;
-  for_each_sm_meeting(address, static_cast<uint32_t>(address) + len, [&](int n) {
+  return sm_allows_read(sm_meeting(address, static_cast<uint32_t>(address) + len));
+}
+
+bool Esc::sm_allows_read(uint16_t meeting) {
+  for (uint16_t mask = meeting; mask != 0; mask &= static_cast<uint16_t>(mask - 1)) {
+    const int n = __builtin_ctz(mask);
     const SmState& s = sm_[n];
     // A SyncManager deactivated by the PDI blocks its buffer: no data, no WKC; so does an
     // empty mailbox the master reads.
     if (!s.active || (sm::is_mailbox(s.control) && !sm::ecat_writes(s.control) &&
                       (sm_status(n) & sm::kStatusFull) == 0)) {
-      allowed = false;
+      return false;
     }
-  });
-  return allowed;
+  }
+  return true;
 }
 
 void Esc::sm_after_read(uint16_t address, uint16_t len) {
+  sm_after_read(sm_meeting(address, static_cast<uint32_t>(address) + len), address, len);
+}
+
+void Esc::sm_after_read(uint16_t meeting, uint16_t address, uint16_t len) {
   const uint32_t end = static_cast<uint32_t>(address) + len;
-  for_each_sm_meeting(address, end, [&](int n) {
+  for (uint16_t mask = meeting; mask != 0; mask &= static_cast<uint16_t>(mask - 1)) {
+    const int n = __builtin_ctz(mask);
     if (!sm::ecat_writes(sm_[n].control)) sm_buffer_access(n, address, end, false);
-  });
+  }
 }
 
 bool Esc::sm_takes_write(int n) const {
@@ -127,19 +143,28 @@ bool Esc::sm_takes_write(int n) const {
 }
 
 bool Esc::sm_allows_write(uint16_t address, uint16_t len) {
-  bool allowed = true;
-  for_each_sm_meeting(address, static_cast<uint32_t>(address) + len, [&](int n) {
+  return sm_allows_write(sm_meeting(address, static_cast<uint32_t>(address) + len));
+}
+
+bool Esc::sm_allows_write(uint16_t meeting) {
+  for (uint16_t mask = meeting; mask != 0; mask &= static_cast<uint16_t>(mask - 1)) {
+    const int n = __builtin_ctz(mask);
     // The master writes only the buffers of SMs it writes: WKC stays 0 and it retries.
-    if (!sm::ecat_writes(sm_[n].control) || !sm_takes_write(n)) allowed = false;
-  });
-  return allowed;
+    if (!sm::ecat_writes(sm_[n].control) || !sm_takes_write(n)) return false;
+  }
+  return true;
 }
 
 void Esc::sm_after_write(uint16_t address, uint16_t len) {
+  sm_after_write(sm_meeting(address, static_cast<uint32_t>(address) + len), address, len);
+}
+
+void Esc::sm_after_write(uint16_t meeting, uint16_t address, uint16_t len) {
   const uint32_t end = static_cast<uint32_t>(address) + len;
-  for_each_sm_meeting(address, end, [&](int n) {
+  for (uint16_t mask = meeting; mask != 0; mask &= static_cast<uint16_t>(mask - 1)) {
+    const int n = __builtin_ctz(mask);
     const SmState& s = sm_[n];
-    if (!sm::ecat_writes(s.control)) return;
+    if (!sm::ecat_writes(s.control)) continue;
     sm_buffer_access(n, address, end, true);
     // A completed buffer with the watchdog trigger enabled retriggers the process-data
     // watchdog (ESC datasheet 0x0804 bit 6, 0x0420).
@@ -147,7 +172,7 @@ void Esc::sm_after_write(uint16_t address, uint16_t len) {
         (s.control & sm::kControlWatchdog)) {
       watchdog_trigger(pass_.port0_ns);
     }
-  });
+  }
 }
 
 void Esc::sm_buffer_access(int n, uint32_t address, uint32_t end, bool filler) {

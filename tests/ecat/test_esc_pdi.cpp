@@ -8,6 +8,7 @@
 
 #include "ecat/esc/esc.hpp"
 #include "tests/ecat/chip_master.hpp"
+#include "tests/support/fmmu_entry.hpp"
 
 namespace rackcat::ecat::test {
 namespace {
@@ -138,6 +139,51 @@ TEST_F(ChipTest, WatchdogExpiryIsAnEventNotAStateChange) {
   EXPECT_EQ(esc.al_status(), 0x01);  // the firmware decides what follows
   pdi8(0x0440);
   EXPECT_EQ(al_events() & 0x40, 0x00u);
+}
+
+// A logical datagram covering only the first bytes of an SM buffer opens the buffer and leaves
+// it open; the one that writes its last byte completes it (ETG.1000.4 §6.7.2: the buffer is
+// handed over on the last byte, whatever access brings it), raising the SM's AL event.
+TEST_F(ChipTest, LrwCoveringPartOfAnOutputBufferDoesNotCompleteIt) {
+  using rackcat::testing::fmmu_entry;
+  sm(2, 0x1100, 4, 0x64);  // buffered, ECAT writes, AL event, watchdog trigger
+  sm(3, 0x1200, 2, 0x20);  // buffered, ECAT reads, AL event
+  apwr(0x0600, fmmu_entry(0x500, 4, 0, 7, 0x1100, 0, 2));
+  apwr(0x0610, fmmu_entry(0x504, 2, 0, 7, 0x1200, 0, 1));
+  const std::vector<uint8_t> in{0x5A, 0xA5};
+  esc.pdi_write(0x1200, in.data(), 2);
+  // Logical 0x500-0x502: three of SM2's four bytes, none of SM3's.
+  auto r = datagram(Command::Lrw, 0x0500, 0, {1, 2, 3});
+  EXPECT_EQ(r.second, 2);
+  EXPECT_EQ(r.first, (std::vector<uint8_t>{1, 2, 3}));
+  EXPECT_EQ(esc.read8(0x0815) & 0x01, 0x00);  // not written yet
+  EXPECT_EQ(esc.read8(0x0815) & 0x80, 0x80);  // write buffer open
+  EXPECT_EQ(al_events() & 0x0400, 0x0000u);
+  // Logical 0x503-0x505: SM2's last byte and SM3's whole buffer.
+  r = datagram(Command::Lrw, 0x0503, 0, {4, 0xEE, 0xEE});
+  EXPECT_EQ(r.second, 3);
+  EXPECT_EQ(r.first, (std::vector<uint8_t>{4, 0x5A, 0xA5}));
+  EXPECT_EQ(esc.read8(0x0815) & 0x81, 0x01);  // completed, no longer open
+  EXPECT_EQ(al_events() & 0x0400, 0x0400u);
+  EXPECT_EQ(esc.read32(0x1100), 0x04030201u);
+  EXPECT_EQ(esc.read8(0x081D) & 0x02, 0x02);  // SM3 read by the master
+}
+
+// LRW with a read FMMU and write FMMUs on the same logical bytes: every read returns the old
+// memory and every write takes the bytes the master sent, not what a read put there
+// (ETG.1000.4 §5.4.3); a write FMMU beside them gets its own byte.
+TEST_F(ChipTest, LrwReadAndWriteFmmusOnTheSameLogicalBytes) {
+  using rackcat::testing::fmmu_entry;
+  apwr(0x0600, fmmu_entry(0x600, 2, 0, 7, 0x1300, 0, 1));
+  apwr(0x0610, fmmu_entry(0x600, 2, 0, 7, 0x1400, 0, 2));
+  apwr(0x0620, fmmu_entry(0x602, 1, 0, 7, 0x1500, 0, 2));
+  apwr(0x1300, {0x12, 0x34});
+  const auto r = datagram(Command::Lrw, 0x0600, 0, {0xAB, 0xCD, 0xEF});
+  EXPECT_EQ(r.second, 3);
+  EXPECT_EQ(r.first, (std::vector<uint8_t>{0x12, 0x34, 0xEF}));
+  EXPECT_EQ(esc.read16(0x1400), 0xCDAB);
+  EXPECT_EQ(esc.read8(0x1500), 0xEF);
+  EXPECT_EQ(esc.read16(0x1300), 0x3412);
 }
 
 }  // namespace
