@@ -19,7 +19,7 @@ for n in "$@"; do
   valgrind --tool=callgrind --callgrind-out-file="$out/cg.$n" "$bench" \
     --benchmark_filter="BM_CyclicLrwFrmw/$n\$" --benchmark_min_time=0.02 >/dev/null 2>&1
   callgrind_annotate --inclusive=yes --tree=caller "$out/cg.$n" |
-    grep -B3 '\* .*Segment::process(std' | grep 'BM_CyclicLrwFrmw' |
+    grep -B3 '\* .*Segment::process(std' | grep -E 'BM_CyclicLrwFrmw|run_cyclic_frames' |
     sed -E 's/^ *([0-9,]+) .*\(([0-9,]+)x\).*/\1 \2/' | tr -d , |
     awk -v n="$n" '{ printf "%d slaves: %.0f instructions per frame (%.0f per slave, %d frames)\n",
                      n, $1 / $2, $1 / $2 / n, $2 }'
