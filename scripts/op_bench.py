@@ -15,6 +15,9 @@ bench/ecat/echo_responder and pinger bench/ecat/wire_pinger). For each slave cou
        busy-poll  both run with --busy-poll; only one spins at a time (the other is stopped with
                   SIGSTOP), alternating rounds; the pinger blocks (2 cores).
      The reply's working counter must be the master's expected one (pysoem expected_wkc).
+     --cycle-us: 0 replays back to back (each frame as soon as the previous reply came); P > 0
+     paces the rounds as a master's cycle does (one frame to each responder every P us), so
+     the slaves' work after a reply has the rest of the cycle, as with a real master.
 
 Then (--sdo-calls): 2,000 pysoem sdo_read of 0x1018:01 (expedited upload), blocking rackcat,
 unpinned, timed one by one in Python (time.perf_counter_ns around the call), and rackcat's CPU
@@ -23,7 +26,7 @@ answering a BRD (working counter = slave count), with RSS and thread count once 
 
     sudo scripts/op_bench.py [--build-dir build] [--slaves 1,16,64,128,256]
         [--modes blocking,busy-poll] [--samples 10000] [--sdo-calls 2000]
-        [--brd-slaves 64,128,256,4096] [--firmware-yield-us N]
+        [--brd-slaves 64,128,256,4096] [--firmware-yield-us N] [--cycle-us 0,1000]
 
 Prints one table; --json FILE also writes the numbers.
 """
@@ -156,11 +159,12 @@ def configure(slaves, tmp, attempts=3):
     return out, expected, wkc, length
 
 
-def replay(pinger_path, names, frame_file, count, tmp, warmup=100):
+def replay(pinger_path, names, frame_file, count, tmp, warmup=100, period_us=0):
     out = tmp / "samples"
     cmd = ["ip", "netns", "exec", NS, str(pinger_path), "--iface",
            ",".join(wb.PAIRS[n][1] for n in names), "--frame-file", str(frame_file),
-           "--count", str(count), "--warmup", str(warmup), "--samples-out", str(out)]
+           "--count", str(count), "--warmup", str(warmup), "--samples-out", str(out),
+           "--period-us", str(period_us)]
     r = wb.sh(*cmd, check=False)
     if r.returncode != 0:
         raise RuntimeError(f"pinger failed: {r.stderr.strip()}")
@@ -172,7 +176,7 @@ def replay(pinger_path, names, frame_file, count, tmp, warmup=100):
     return res
 
 
-def lrw_run(args, slaves, mode, tmp, report):
+def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
     busy = mode == "busy-poll"
     echo = wb.find(args.build, "echo_responder")
     pinger = wb.find(args.build, "wire_pinger")
@@ -194,7 +198,8 @@ def lrw_run(args, slaves, mode, tmp, report):
         if not busy:
             for _ in range(args.rounds):
                 for name, (vals, n_lost, w) in replay(pinger, ["floor", "slave"], frame,
-                                                      per_round, tmp).items():
+                                                      per_round, tmp,
+                                                      period_us=cycle_us).items():
                     samples[name] += vals
                     lost[name] += n_lost
                     if name == "slave":
@@ -209,7 +214,8 @@ def lrw_run(args, slaves, mode, tmp, report):
                         procs[name].send_signal(signal.SIGCONT)
                         running = name
                         time.sleep(0.05)
-                    vals, n_lost, w = replay(pinger, [name], frame, per_round, tmp)[name]
+                    vals, n_lost, w = replay(pinger, [name], frame, per_round, tmp,
+                                             period_us=cycle_us)[name]
                     samples[name] += vals
                     lost[name] += n_lost
                     if name == "slave":
@@ -224,7 +230,8 @@ def lrw_run(args, slaves, mode, tmp, report):
             except RuntimeError as e:
                 print(f"op_bench: {e}", file=sys.stderr)
     f50, s50 = wb.pct(samples["floor"], 50), wb.pct(samples["slave"], 50)
-    row = {"mode": mode, "slaves": slaves, "frame_bytes": length, "expected_wkc": expected,
+    row = {"mode": mode, "cycle_us": cycle_us, "slaves": slaves, "frame_bytes": length,
+           "expected_wkc": expected,
            "wkc": sorted(wkcs), "config_s": round(config_s, 1), "rss_kib": rss_kib,
            "threads": threads,
            "floor_us": [wb.pct(samples["floor"], p) for p in (50, 90, 99)],
@@ -232,7 +239,8 @@ def lrw_run(args, slaves, mode, tmp, report):
            "ratio_p50": s50 / f50, "per_slave_ns": (s50 - f50) * 1000 / slaves,
            "lost": lost}
     report["lrw"].append(row)
-    print(f"{mode:9s} {slaves:5d} {length:5d} B  wkc {sorted(wkcs)} (expected {expected})  "
+    cycle = "b2b" if cycle_us == 0 else f"{cycle_us}us"
+    print(f"{mode:9s} {cycle:>7s} {slaves:5d} {length:5d} B  wkc {sorted(wkcs)} (expected {expected})  "
           f"floor {f50:7.1f}  rackcat {s50:7.1f} us p50  x{s50 / f50:5.2f}  "
           f"p99 {row['floor_us'][2]:7.1f} / {row['slave_us'][2]:7.1f}  "
           f"RSS {rss_kib / 1024:6.1f} MiB ({rss_kib / slaves:7.0f} KiB/slave)  "
@@ -305,6 +313,8 @@ def main():
                     help="slave counts for the start-up BRD / RSS / thread count run ('' = skip)")
     ap.add_argument("--firmware-yield-us", type=int, default=0,
                     help="rackcat run --firmware-yield-us (0 = off, rackcat's default)")
+    ap.add_argument("--cycle-us", default="0",
+                    help="master cycle times to replay at, us (0 = back to back); e.g. 0,1000")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     if os.geteuid() != 0:
@@ -320,7 +330,8 @@ def main():
     try:
         for n in [int(x) for x in args.slaves.split(",") if x]:
             for mode in [m for m in args.modes.split(",") if m]:
-                lrw_run(args, n, mode, tmp, report)
+                for cycle_us in [int(x) for x in args.cycle_us.split(",") if x]:
+                    lrw_run(args, n, mode, tmp, report, cycle_us)
         if args.sdo_calls > 0:
             sdo_run(args, tmp, report)
         for n in [int(x) for x in args.brd_slaves.split(",") if x]:

@@ -4,7 +4,13 @@
 //
 //   wire_pinger --iface IFACE[,IFACE...] --frame brd|lrw [--count N] [--slaves N] [--lrw-bytes B]
 //               [--busy-poll] [--setup-fmmu] [--warmup N] [--samples-out FILE]
-//               [--frame-file FILE]
+//               [--frame-file FILE] [--period-us P]
+//
+// --period-us paces the frames as a master's cycle does (ETG.1000.4 §5: the master sends its
+// cyclic frame once per cycle): round i starts at start + i x P (absolute, clock_nanosleep; a
+// busy-poll pinger spins to the deadline instead), and a round that starts late does not try to
+// catch up. 0 (the default) sends back to back: each frame as soon as the previous reply came.
+// With several interfaces, one round sends to each of them in turn.
 //
 // --frame-file replays a captured frame (raw Ethernet bytes, e.g. a master's cyclic LRW frame
 // captured by scripts/op_bench.py) instead of --frame: the source MAC becomes the socket's,
@@ -151,6 +157,18 @@ int64_t round_trip(Socket& s, Frame& f, uint8_t index, uint16_t& wkc_out) {
   }
 }
 
+// Waits until clock time `t` (now_ns's clock): spinning for a busy-poll pinger, else asleep.
+void wait_until(uint64_t t, bool spin) {
+  if (spin) {
+    while (now_ns() < t) {
+    }
+    return;
+  }
+  const timespec ts{static_cast<time_t>(t / 1'000'000'000u), static_cast<long>(t % 1'000'000'000u)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
 double percentile(std::vector<int64_t>& v, double p) {
   if (v.empty()) return 0;
   const size_t k = std::min(v.size() - 1, static_cast<size_t>(p / 100.0 * (v.size() - 1) + 0.5));
@@ -228,6 +246,7 @@ int main(int argc, char** argv) {
   bool setup_fmmu = false;
   std::string samples_out;
   std::string frame_file;
+  long period_us = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
@@ -251,13 +270,15 @@ int main(int argc, char** argv) {
       samples_out = next();
     else if (a == "--frame-file")
       frame_file = next();
+    else if (a == "--period-us")
+      period_us = std::atol(next().c_str());
     else {
       std::fprintf(stderr, "wire_pinger: unknown argument %s\n", a.c_str());
       return 2;
     }
   }
   if (iface.empty() || (kind != "brd" && kind != "lrw") || count <= 0 || slaves <= 0 ||
-      lrw_bytes <= 0 || lrw_bytes > 1024) {
+      lrw_bytes <= 0 || lrw_bytes > 1024 || period_us < 0 || period_us > 1'000'000) {
     std::fprintf(stderr, "wire_pinger: bad arguments\n");
     return 2;
   }
@@ -294,7 +315,13 @@ int main(int argc, char** argv) {
     }
     targets[k].samples.reserve(static_cast<size_t>(count));
   }
+  const uint64_t period_ns = static_cast<uint64_t>(period_us) * 1000u;
+  uint64_t next_cycle = now_ns();
   for (int i = 0; i < warmup + count; ++i) {
+    if (period_ns != 0) {
+      wait_until(next_cycle, busy);
+      next_cycle = std::max(next_cycle + period_ns, now_ns());
+    }
     for (size_t j = 0; j < targets.size(); ++j) {
       // Alternate the order too, so no target always goes first after the other.
       Target& t = targets[(i % 2) ? targets.size() - 1 - j : j];
