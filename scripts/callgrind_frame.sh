@@ -6,6 +6,7 @@
 # can be compared on a busy machine. Needs valgrind (Debian package valgrind).
 #
 #   scripts/callgrind_frame.sh BENCH_ECAT SLAVES...   e.g. build/bench/ecat/bench_ecat 16 128
+# BENCHMARK=BM_CyclicLrwReplyPath counts the reply path alone (the frame, no firmware).
 set -euo pipefail
 if [ $# -lt 2 ]; then
   echo "usage: $0 BENCH_ECAT SLAVES..." >&2
@@ -13,13 +14,14 @@ if [ $# -lt 2 ]; then
 fi
 bench=$1
 shift
+benchmark=${BENCHMARK:-BM_CyclicLrwFrmw}
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 for n in "$@"; do
   valgrind --tool=callgrind --callgrind-out-file="$out/cg.$n" "$bench" \
-    --benchmark_filter="BM_CyclicLrwFrmw/$n\$" --benchmark_min_time=0.02 >/dev/null 2>&1
+    --benchmark_filter="$benchmark/$n\$" --benchmark_min_time=0.02 >/dev/null 2>&1
   callgrind_annotate --inclusive=yes --tree=caller "$out/cg.$n" |
-    grep -B3 '\* .*Segment::process(std' | grep -E 'BM_CyclicLrwFrmw|run_cyclic_frames' |
+    grep -B3 '\* .*Segment::process(std' | grep -E "$benchmark|run_cyclic_frames" |
     sed -E 's/^ *([0-9,]+) .*\(([0-9,]+)x\).*/\1 \2/' | tr -d , |
     awk -v n="$n" '{ printf "%d slaves: %.0f instructions per frame (%.0f per slave, %d frames)\n",
                      n, $1 / $2, $1 / $2 / n, $2 }'

@@ -189,6 +189,12 @@ class Esc {
     uint16_t physical_start = 0;
     uint8_t physical_start_bit = 0;
     uint8_t type = 0;  // bit 0 read, bit 1 write
+    // Derived when the FMMU is (re)loaded (ETG.1000.4 §6.6): logical bits first_bit..last_bit
+    // (maps = false when the range is empty) and physical bit = logical bit + shift.
+    bool maps = false;
+    uint64_t first_bit = 0;
+    uint64_t last_bit = 0;
+    int64_t shift = 0;
   };
 
   // esc.cpp: reset, datagram dispatch, physical access.
@@ -223,13 +229,24 @@ class Esc {
     int64_t shift;  // physical bit = logical bit + shift
     uint32_t phys_first;
     uint32_t phys_len;
+    int fmmu;  // FMMU n (set by process_logical)
   };
   // Intersects FMMU `f` with the datagram's logical bits dg_lo..dg_hi; false when they do not
   // meet or the physical side would run past the 64 KiB address space.
   static bool intersect_fmmu(const FmmuState& f, uint64_t dg_lo, uint64_t dg_hi, FmmuSpan& out);
+  // The enabled SMs span s meets: known per FMMU (refresh_fmmu_meetings) or looked up.
+  uint16_t span_meeting(const FmmuSpan& s) const {
+    if ((fmmu_meeting_known_ & (1u << s.fmmu)) != 0) return fmmu_meeting_[s.fmmu];
+    return sm_meeting(s.phys_first, s.phys_first + s.phys_len);
+  }
   bool fmmu_read(const FmmuSpan& s, uint64_t datagram_bit0, uint8_t* data);
   bool fmmu_write(const FmmuSpan& s, uint64_t datagram_bit0, const uint8_t* data);
   void reload_fmmu(int index);
+  // The enabled SyncManagers an access through FMMU n meets, when that is the same for every
+  // part of its physical range: none, or one SM that shares no byte with another and holds the
+  // whole range. Recomputed whenever an FMMU or SM is (re)loaded; fmmu_meeting_known_ bit n
+  // says fmmu_meeting_[n] holds it (else the access looks the SMs up, sm_meeting).
+  void refresh_fmmu_meetings();
   // sync_manager.cpp: buffer semantics.
   void reload_sm(int index);
   bool sm_allows_read(uint16_t address, uint16_t len);
@@ -300,6 +317,8 @@ class Esc {
   uint32_t sm_first_byte_ = reg::kAddressSpace;  // lowest start of an enabled SM's buffer
   std::array<FmmuState, kFmmus> fmmu_{};
   uint16_t fmmu_active_mask_ = 0;  // bit n: FMMU n activated with a read or write type
+  std::array<uint16_t, kFmmus> fmmu_meeting_{};
+  uint16_t fmmu_meeting_known_ = 0;
   uint32_t* fmmu_generation_ = nullptr;
 
   bool port1_link_ = false;

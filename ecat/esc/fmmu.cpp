@@ -22,12 +22,47 @@ inline uint8_t byte_mask(uint64_t byte, uint64_t lo, uint64_t hi) {
   return mask;
 }
 
+// Copies n bytes without a library call for the short runs of process data (a few bytes per
+// slave): two fixed-size, possibly overlapping moves; longer runs go to memcpy.
+inline void copy_bytes(uint8_t* to, const uint8_t* from, uint64_t n) {
+  if (n >= 8 && n <= 16) {
+    uint64_t a = 0;
+    uint64_t b = 0;
+    std::memcpy(&a, from, 8);
+    std::memcpy(&b, from + n - 8, 8);
+    std::memcpy(to, &a, 8);
+    std::memcpy(to + n - 8, &b, 8);
+  } else if (n >= 4 && n < 8) {
+    uint32_t a = 0;
+    uint32_t b = 0;
+    std::memcpy(&a, from, 4);
+    std::memcpy(&b, from + n - 4, 4);
+    std::memcpy(to, &a, 4);
+    std::memcpy(to + n - 4, &b, 4);
+  } else if (n >= 2 && n < 4) {
+    uint16_t a = 0;
+    uint16_t b = 0;
+    std::memcpy(&a, from, 2);
+    std::memcpy(&b, from + n - 2, 2);
+    std::memcpy(to, &a, 2);
+    std::memcpy(to + n - 2, &b, 2);
+  } else if (n == 1) {
+    *to = *from;
+  } else if (n > 16) {
+    std::memcpy(to, from, n);
+  }
+}
+
 // Byte-aligned mapping (the physical bit of a logical bit has the same position in its byte):
 // moves logical bits lo..hi from `from` to `to`, both pointing at the byte that holds bit
 // `lo`. The partial first and last bytes are merged under their masks (ETG.1000.4 §6.6: bits
-// outside the mapping stay as they are), the whole bytes between go in one copy.
-void merge_bits(uint8_t* to, const uint8_t* from, uint64_t lo, uint64_t hi) {
+// outside the mapping stay as they are), the whole bytes between are copied.
+inline void merge_bits(uint8_t* to, const uint8_t* from, uint64_t lo, uint64_t hi) {
   const uint64_t bytes = hi / 8 - lo / 8 + 1;
+  if (lo % 8 == 0 && hi % 8 == 7) {  // whole bytes: the usual process-data mapping
+    copy_bytes(to, from, bytes);
+    return;
+  }
   const auto first = static_cast<uint8_t>(0xFF << (lo % 8));
   const auto last = static_cast<uint8_t>(0xFF >> (7 - hi % 8));
   auto merge = [&](uint64_t i, uint8_t mask) {
@@ -38,24 +73,18 @@ void merge_bits(uint8_t* to, const uint8_t* from, uint64_t lo, uint64_t hi) {
     return;
   }
   merge(0, first);
-  if (bytes > 2) std::memcpy(to + 1, from + 1, bytes - 2);
+  copy_bytes(to + 1, from + 1, bytes - 2);
   merge(bytes - 1, last);
 }
 
 }  // namespace
 
 bool Esc::intersect_fmmu(const FmmuState& f, uint64_t dg_lo, uint64_t dg_hi, FmmuSpan& out) {
-  if (f.length == 0) return false;
-  const uint64_t f_lo = static_cast<uint64_t>(f.logical_start) * 8 + f.logical_start_bit;
-  const uint64_t f_hi =
-      (static_cast<uint64_t>(f.logical_start) + f.length - 1) * 8 + f.logical_stop_bit;
-  if (f_hi < f_lo) return false;
-  out.lo = std::max(f_lo, dg_lo);
-  out.hi = std::min(f_hi, dg_hi);
+  if (!f.maps) return false;
+  out.lo = std::max(f.first_bit, dg_lo);
+  out.hi = std::min(f.last_bit, dg_hi);
   if (out.lo > out.hi) return false;
-  out.shift =
-      static_cast<int64_t>(static_cast<uint64_t>(f.physical_start) * 8 + f.physical_start_bit) -
-      static_cast<int64_t>(f_lo);
+  out.shift = f.shift;
   const uint64_t p_lo = static_cast<uint64_t>(static_cast<int64_t>(out.lo) + out.shift);
   const uint64_t p_hi = static_cast<uint64_t>(static_cast<int64_t>(out.hi) + out.shift);
   if (p_hi / 8 >= reg::kAddressSpace) return false;
@@ -74,12 +103,45 @@ void Esc::reload_fmmu(int index) {
   f.physical_start = le::get16(p + 8);
   f.physical_start_bit = p[10] & 0x07;
   f.type = p[11] & 0x03;
+  // ETG.1000.4 §6.6: logical bits start x 8 + start bit .. (start + length - 1) x 8 + stop
+  // bit; a one-byte FMMU whose stop bit lies before its start bit maps nothing.
+  f.first_bit = static_cast<uint64_t>(f.logical_start) * 8 + f.logical_start_bit;
+  f.last_bit = (static_cast<uint64_t>(f.logical_start) + f.length - 1) * 8 + f.logical_stop_bit;
+  f.maps = f.length != 0 && f.last_bit >= f.first_bit;
+  f.shift =
+      static_cast<int64_t>(static_cast<uint64_t>(f.physical_start) * 8 + f.physical_start_bit) -
+      static_cast<int64_t>(f.first_bit);
   fmmu_active_mask_ = 0;
   for (int n = 0; n < kFmmus; ++n) {
     const uint8_t* q = &mem_[reg::kFmmu + reg::kFmmuSize * n];
     if ((q[12] & 0x01) && (q[11] & 0x03)) fmmu_active_mask_ |= static_cast<uint16_t>(1u << n);
   }
+  refresh_fmmu_meetings();
   if (fmmu_generation_ != nullptr) ++*fmmu_generation_;  // the segment's map is stale
+}
+
+void Esc::refresh_fmmu_meetings() {
+  fmmu_meeting_known_ = 0;
+  for (int n = 0; n < kFmmus; ++n) {
+    const FmmuState& f = fmmu_[n];
+    if (!f.maps) continue;
+    const int64_t p_lo = static_cast<int64_t>(f.first_bit) + f.shift;
+    const int64_t p_hi = static_cast<int64_t>(f.last_bit) + f.shift;
+    if (p_hi / 8 >= static_cast<int64_t>(reg::kAddressSpace)) continue;
+    const auto first = static_cast<uint32_t>(p_lo / 8);
+    const auto end = static_cast<uint32_t>(p_hi / 8 + 1);
+    const uint16_t meeting = sm_meeting(first, end);
+    bool known = meeting == 0;
+    if (std::has_single_bit(meeting) && (meeting & sm_alone_mask_) != 0) {
+      // Every part of the range meets this SM and, as no other SM shares its bytes, only it.
+      const SmState& s = sm_[std::countr_zero(meeting)];
+      known = s.start <= first && end <= static_cast<uint32_t>(s.start) + s.length;
+    }
+    if (known) {
+      fmmu_meeting_[n] = meeting;
+      fmmu_meeting_known_ = static_cast<uint16_t>(fmmu_meeting_known_ | (1u << n));
+    }
+  }
 }
 
 size_t Esc::fmmu_ranges(std::span<FmmuRange, kFmmus> out) const {
@@ -87,12 +149,8 @@ size_t Esc::fmmu_ranges(std::span<FmmuRange, kFmmus> out) const {
   for (uint16_t m = fmmu_active_mask_; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const int i = std::countr_zero(m);
     const FmmuState& f = fmmu_[i];
-    if (f.length == 0) continue;
-    const uint64_t lo = static_cast<uint64_t>(f.logical_start) * 8 + f.logical_start_bit;
-    const uint64_t hi =
-        (static_cast<uint64_t>(f.logical_start) + f.length - 1) * 8 + f.logical_stop_bit;
-    if (hi < lo) continue;  // one byte whose stop bit lies before its start bit: maps nothing
-    out[n++] = FmmuRange{lo, hi, static_cast<uint8_t>(i)};
+    if (!f.maps) continue;  // e.g. one byte whose stop bit lies before its start bit
+    out[n++] = FmmuRange{f.first_bit, f.last_bit, static_cast<uint8_t>(i)};
   }
   return n;
 }
@@ -129,12 +187,14 @@ uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, u
   uint64_t write_last = 0;
   const uint64_t dg_byte0 = dg_lo / 8;
   for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
-    const FmmuState& f = fmmu_[std::countr_zero(m)];
+    const int index = std::countr_zero(m);
+    const FmmuState& f = fmmu_[index];
     const bool r = may_read && (f.type & 0x01) != 0;
     const bool w = may_write && (f.type & 0x02) != 0;
     if (!r && !w) continue;
     FmmuSpan s{};
     if (!intersect_fmmu(f, dg_lo, dg_hi, s)) continue;
+    s.fmmu = index;
     if (r) {
       reads[read_count++] = s;
       read_first = std::min(read_first, s.lo / 8 - dg_byte0);
@@ -170,7 +230,7 @@ bool Esc::fmmu_read(const FmmuSpan& s, uint64_t dg_lo, uint8_t* data) {
   const uint64_t hi = s.hi;
   const auto first = static_cast<uint16_t>(s.phys_first);
   const auto plen = static_cast<uint16_t>(s.phys_len);
-  const uint16_t meeting = sm_meeting(first, s.phys_first + s.phys_len);
+  const uint16_t meeting = span_meeting(s);
   if (!sm_allows_read(meeting)) return false;
   const bool registers = first < reg::kProcessRam;
   const uint16_t reg_len =
@@ -199,7 +259,7 @@ bool Esc::fmmu_write(const FmmuSpan& s, uint64_t dg_lo, const uint8_t* data) {
   const uint64_t hi = s.hi;
   const auto first = static_cast<uint16_t>(s.phys_first);
   const auto plen = static_cast<uint16_t>(s.phys_len);
-  const uint16_t meeting = sm_meeting(first, s.phys_first + s.phys_len);
+  const uint16_t meeting = span_meeting(s);
   if (!sm_allows_write(meeting)) return false;
   if (write_protection_active() && !write_allowed(reg::kProcessRam)) return false;  // ESC-wide
   if (s.shift % 8 == 0 && s.phys_first >= reg::kProcessRam) {

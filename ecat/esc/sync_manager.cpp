@@ -96,6 +96,7 @@ void Esc::reload_sm(int n) {
   // retriggered; an SM2 the firmware deactivated (PREOP and below) takes it out of play.
   if (!s.active && (s.control & 0x40) && n == 2) watchdog_armed_ = false;
   update_sm_events(n);
+  refresh_fmmu_meetings();  // the FMMUs' SMs may have moved
 }
 
 uint16_t Esc::sm_meeting(uint32_t address, uint32_t end) const {

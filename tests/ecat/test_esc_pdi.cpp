@@ -186,5 +186,87 @@ TEST_F(ChipTest, LrwReadAndWriteFmmusOnTheSameLogicalBytes) {
   EXPECT_EQ(esc.read16(0x1300), 0x3412);
 }
 
+// The FMMUs are configured before the SyncManagers they map (the ESC remembers which SM an FMMU
+// meets, so an SM set up, moved or deactivated later must still rule the access, ETG.1000.4
+// §6.7): the SM2 buffer completes only with its last byte, and an SM3 the PDI deactivates
+// blocks the read (no data, no working counter).
+TEST_F(ChipTest, LrwFollowsSyncManagersConfiguredAfterTheFmmus) {
+  using rackcat::testing::fmmu_entry;
+  apwr(0x0600, fmmu_entry(0x500, 4, 0, 7, 0x1100, 0, 2));
+  apwr(0x0610, fmmu_entry(0x504, 2, 0, 7, 0x1200, 0, 1));
+  // No SM yet: plain memory, both FMMUs count.
+  auto r = datagram(Command::Lrw, 0x0500, 0, {1, 2, 3, 4, 0xEE, 0xEE});
+  EXPECT_EQ(r.second, 3);
+  sm(2, 0x1100, 4, 0x64);  // buffered, ECAT writes, AL event, watchdog trigger
+  sm(3, 0x1200, 2, 0x20);  // buffered, ECAT reads, AL event
+  esc.pdi_write(0x1200, std::vector<uint8_t>{0x5A, 0xA5}.data(), 2);
+  r = datagram(Command::Lrw, 0x0500, 0, {5, 6, 7});  // three of SM2's four bytes
+  EXPECT_EQ(r.second, 2);
+  EXPECT_EQ(esc.read8(0x0815) & 0x81, 0x80);  // open, not written
+  EXPECT_EQ(al_events() & 0x0400, 0x0000u);
+  r = datagram(Command::Lrw, 0x0503, 0, {8, 0xEE, 0xEE});
+  EXPECT_EQ(r.second, 3);
+  EXPECT_EQ(r.first, (std::vector<uint8_t>{8, 0x5A, 0xA5}));
+  EXPECT_EQ(esc.read8(0x0815) & 0x81, 0x01);
+  EXPECT_EQ(al_events() & 0x0400, 0x0400u);
+  EXPECT_EQ(esc.read32(0x1100), 0x08070605u);
+  // The PDI deactivates SM3 (0x081F bit 0): the input FMMU no longer reads.
+  pdi_write8(0x081F, 0x01);
+  r = datagram(Command::Lrd, 0x0504, 0, {0xEE, 0xEE});
+  EXPECT_EQ(r.second, 0);
+  EXPECT_EQ(r.first, (std::vector<uint8_t>{0xEE, 0xEE}));
+  // SM3 moved away by the master (enabled elsewhere): the FMMU's bytes are plain memory again.
+  sm(3, 0x1300, 2, 0x20);
+  r = datagram(Command::Lrd, 0x0504, 0, {0xEE, 0xEE});
+  EXPECT_EQ(r.second, 1);
+  EXPECT_EQ(r.first, (std::vector<uint8_t>{0x5A, 0xA5}));
+}
+
+// One write FMMU over two SyncManagers' buffers: one LWR completes both (each SM sees its first
+// and last byte), and a second SM placed inside the first one's buffer makes them share bytes.
+TEST_F(ChipTest, LwrThroughOneFmmuOverTwoSyncManagers) {
+  using rackcat::testing::fmmu_entry;
+  sm(2, 0x1100, 2, 0x24);  // buffered, ECAT writes, AL event
+  sm(4, 0x1102, 3, 0x24);
+  apwr(0x0600, fmmu_entry(0x800, 5, 0, 7, 0x1100, 0, 2));
+  auto r = datagram(Command::Lwr, 0x0800, 0, {1, 2, 3, 4, 5});
+  EXPECT_EQ(r.second, 1);
+  EXPECT_EQ(esc.read8(0x0815) & 0x01, 0x01);
+  EXPECT_EQ(esc.read8(0x0825) & 0x01, 0x01);
+  EXPECT_EQ(al_events() & 0x1400, 0x1400u);
+  EXPECT_EQ(esc.read8(0x1104), 5);
+  // SM4 now shares SM2's last byte: a write of the FMMU's first three bytes completes SM2's
+  // buffer and opens SM4's without completing it.
+  sm(4, 0x1101, 4, 0x24);
+  r = datagram(Command::Lwr, 0x0800, 0, {9, 9, 9});
+  EXPECT_EQ(r.second, 1);
+  EXPECT_EQ(esc.read8(0x0815) & 0x80, 0x00);  // SM2 complete
+  EXPECT_EQ(esc.read8(0x0825) & 0x80, 0x80);  // SM4 open
+  EXPECT_EQ(esc.read8(0x1102), 9);
+}
+
+// Byte-aligned mappings of every short length (the copies without a library call) and a long
+// one: each byte lands where the FMMU maps it, nothing beside it changes.
+TEST_F(ChipTest, ByteAlignedMappingsOfEveryShortLength) {
+  using rackcat::testing::fmmu_entry;
+  for (uint16_t len = 1; len <= 20; ++len) {
+    apwr(0x0600, fmmu_entry(0x10000, len, 0, 7, 0x2001, 0, 2));
+    apwr(0x0610, fmmu_entry(0x20000, len, 0, 7, 0x2001, 0, 1));
+    std::vector<uint8_t> guard(len + 2, 0xC3);
+    apwr(0x2000, guard);
+    std::vector<uint8_t> out(len);
+    for (uint16_t i = 0; i < len; ++i) out[i] = static_cast<uint8_t>(0x10 + i);
+    auto w = datagram(Command::Lwr, 0x0000, 1, out);  // logical 0x10000
+    EXPECT_EQ(w.second, 1) << len;
+    const auto back = aprd(0x2000, static_cast<uint16_t>(len + 2)).first;
+    EXPECT_EQ(back.front(), 0xC3) << len;
+    EXPECT_EQ(back.back(), 0xC3) << len;
+    EXPECT_EQ(std::vector<uint8_t>(back.begin() + 1, back.end() - 1), out) << len;
+    auto r = datagram(Command::Lrd, 0x0000, 2, std::vector<uint8_t>(len, 0));
+    EXPECT_EQ(r.second, 1) << len;
+    EXPECT_EQ(r.first, out) << len;
+  }
+}
+
 }  // namespace
 }  // namespace rackcat::ecat::test
