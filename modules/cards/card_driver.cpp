@@ -1,5 +1,7 @@
 #include "modules/cards/card_driver.hpp"
 
+#include <algorithm>
+
 #include "modules/cards/drivers.hpp"
 #include "modules/cards/substitute.hpp"
 
@@ -28,8 +30,11 @@ uint16_t CardDriver::output_reaction(size_t i) const {
 void CardDriver::substitute_inputs(bool rim_offline) {
   if (input_reaction_ == nullptr) return;
   uint32_t status = 0;
-  for (size_t i = 0; i < inputs_.size() && i < reaction_channels_; ++i) {
-    InputChannel& in = inputs_[i];
+  // Bounds and base hoisted: the stores below must not make the loop reload the vector.
+  const size_t n = std::min(inputs_.size(), reaction_channels_);
+  InputChannel* const channels = inputs_.data();
+  for (size_t i = 0; i < n; ++i) {
+    InputChannel& in = channels[i];
     if (!rim_offline && !in.open) {
       in.last_valid = in.code;
       continue;

@@ -104,6 +104,7 @@ class CardDriver {
   coe::Object* object(uint16_t area_base, uint8_t nibble);
   // Update driven value, wire level and code of output i (inline: every output, every cycle).
   void drive(size_t i, double value, uint32_t code) {
+    ++drive_epoch_;
     OutputChannel& o = outputs_[i];
     o.driven = value;
     o.code = code;
@@ -119,6 +120,17 @@ class CardDriver {
         break;
     }
   }
+  // read_outputs()'s shortcut (issue 16: no per-channel work while the master repeats its
+  // output data): true when `word` is what the last outputs_taken() recorded and nothing has
+  // driven an output since (safe state, RIM loss, wiring fault, de-energise all go through
+  // drive()). The 0x7nnX word itself is read every cycle, so SDO writes are seen too.
+  bool outputs_current(uint32_t word) const {
+    return word == taken_word_ && drive_epoch_ == taken_epoch_;
+  }
+  void outputs_taken(uint32_t word) {
+    taken_word_ = word;
+    taken_epoch_ = drive_epoch_;
+  }
   // Puts `code` as input i's process-data value (every sample of an oversampled card).
   virtual void put_input_code(size_t /*i*/, uint32_t /*code*/) {}
 
@@ -133,6 +145,11 @@ class CardDriver {
   // Cyclic path: the channels 0x4nnA has entries for, and 0x4nnC's value slot.
   size_t reaction_channels_ = 0;
   coe::EntrySlot input_status_slot_;
+
+ private:
+  uint64_t drive_epoch_ = 1;  // counts drive() calls
+  uint64_t taken_epoch_ = 0;  // drive_epoch_ at outputs_taken() (0: never)
+  uint32_t taken_word_ = 0;
 };
 
 // The driver for a module's card (by the catalogue's Signal); every input starts with a

@@ -79,12 +79,14 @@ class DigitalInputDriver final : public CardDriver {
       std::memset(raw_.data(), 0, raw_.size());
     }
     for (auto& in : inputs_) in.code = 0;
+    codes_current_ = false;
   }
 
   const char* input_unit() const override { return "bit"; }
 
  protected:
   void put_input_code(size_t i, uint32_t code) override {
+    codes_current_ = false;
     const uint32_t bit = 1u << i;
     if (samples_ == 1) {
       const auto word = static_cast<uint32_t>(obj_.get_u(1));
@@ -101,8 +103,10 @@ class DigitalInputDriver final : public CardDriver {
  private:
   uint32_t sample_word(double t) {
     uint32_t word = 0;
-    for (size_t i = 0; i < inputs_.size(); ++i) {
-      InputChannel& in = inputs_[i];
+    InputChannel* const channels = inputs_.data();
+    const size_t n = inputs_.size();
+    for (size_t i = 0; i < n; ++i) {
+      InputChannel& in = channels[i];
       in.value = in.source->sample(t);
       // Inverted cards report a low input as 1 (guide Table 3 0x9000).
       if (level(in.value) != inverted_) word |= 1u << i;
@@ -110,7 +114,12 @@ class DigitalInputDriver final : public CardDriver {
     return word;
   }
   void inputs_code(uint32_t word) {
+    // The codes hold `word` already unless a substitute value or clear_inputs() changed one
+    // since (issue 16: no per-channel stores while the inputs stay the same).
+    if (codes_current_ && word == coded_word_) return;
     for (size_t i = 0; i < inputs_.size(); ++i) inputs_[i].code = (word >> i) & 1u;
+    coded_word_ = word;
+    codes_current_ = true;
   }
 
   coe::Object& obj_;
@@ -119,6 +128,8 @@ class DigitalInputDriver final : public CardDriver {
   coe::EntrySlot word_;  // DINx16 / DINx8 (DINx4 is a BIT4: set_u fallback)
   std::span<uint8_t> raw_;
   unsigned sample_bytes_ = 1;
+  uint32_t coded_word_ = 0;     // the word inputs_code() last stored in the channels' codes
+  bool codes_current_ = false;  // ...and no code changed since
 };
 
 // Reads the digital output word of 0x7nnX and applies 0x4nn0/0x4nn1 on leaving OP.
@@ -194,8 +205,10 @@ class DigitalOutputDriver final : public CardDriver {
 
   void read_outputs() override {
     const uint32_t word = dout_.commanded();
+    if (outputs_current(word)) return;  // the channels already drive this word
     for (size_t i = 0; i < outputs_.size(); ++i) outputs_[i].commanded = (word >> i) & 1u;
     drive_word(word);
+    outputs_taken(word);
   }
   void apply_safe_state() override {
     drive_word(dout_.substitute_word(*this, driven_word(outputs_)));
@@ -235,8 +248,10 @@ class DioDriver final : public CardDriver {
 
   void read_outputs() override {
     const uint32_t word = dout_.commanded();
+    if (outputs_current(word)) return;  // the channels already drive this word
     for (size_t i = 0; i < outputs_.size(); ++i) outputs_[i].commanded = (word >> i) & 1u;
     drive_word(word);
+    outputs_taken(word);
   }
   void apply_safe_state() override {
     drive_word(dout_.substitute_word(*this, driven_word(outputs_)));

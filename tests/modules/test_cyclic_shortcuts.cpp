@@ -1,0 +1,71 @@
+// The cyclic path's shortcuts (issue 16) change nothing a master or the control API sees: a
+// digital output card skips its channel work while the master repeats its output data, a
+// digital input card its code stores while its inputs stay the same; anything that drives an
+// output or changes a code in between (safe state, wiring fault, RIM loss, substitute values)
+// is still seen on the next cycle.
+#include "rack_fixture.hpp"
+
+using namespace rackcat;
+using namespace rackcat::modules;
+using namespace rackcat::modules::testing;
+
+TEST_F(RackTest, RepeatedOutputsAfterASafeStateAreDrivenAgain) {
+  CardDriver& dout = at(2, 7);
+  CardDriver& din = at(2, 8);  // channels 0,1 looped from slot 7
+  to_op();
+  module_obj(dout, 0x7000, 0x0).set_u(1, 0x3);
+  cycle();
+  cycle();  // same output data: the shortcut
+  EXPECT_EQ(dout.outputs()[1].driven, 1.0);
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x3u);
+  // Leaving OP drives the substitute values (0x4nn0 default: all off)...
+  go(EsmState::Op, EsmState::SafeOp);
+  cycle();
+  EXPECT_EQ(dout.outputs()[1].driven, 0.0);
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0u);
+  // ...and back in OP the unchanged output data is driven again.
+  go(EsmState::SafeOp, EsmState::Op);
+  cycle();
+  EXPECT_EQ(dout.outputs()[0].driven, 1.0);
+  EXPECT_EQ(dout.outputs()[1].driven, 1.0);
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x3u);
+}
+
+TEST_F(RackTest, WiringFaultBetweenRepeatedOutputsReachesTheLoopback) {
+  CardDriver& dout = at(2, 7);
+  CardDriver& din = at(2, 8);
+  to_op();
+  module_obj(dout, 0x7000, 0x0).set_u(1, 0x3);
+  cycle();
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x3u);
+  // A short to ground (a safe wiring fault, guide §4.7): the wire reads 0 although driven.
+  rack.set_wiring_fault(dout.module().number, 0, WiringFault::ShortToGround);
+  cycle();
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x2u);
+  EXPECT_EQ(dout.outputs()[0].driven, 1.0);
+  rack.set_wiring_fault(dout.module().number, 0, WiringFault::None);
+  cycle();
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x3u);
+  EXPECT_EQ(dout.outputs()[0].wire, 1.0);
+}
+
+TEST_F(RackTest, SubstituteCodesGiveWayToTheSameInputsAfterTheRimReturns) {
+  CardDriver& dout = at(2, 7);
+  CardDriver& din = at(2, 8);
+  to_op();
+  module_obj(dout, 0x7000, 0x0).set_u(1, 0x3);
+  cycle();
+  const auto before = module_obj(din, 0x6000, 0x0).get_u(1);
+  ASSERT_EQ(before & 0x3u, 0x3u);
+  ASSERT_EQ(din.inputs()[0].code, 1u);
+  // RIM lost: the input codes are 0 (or their substitutes), then the very same inputs return.
+  rack.set_rim_state(2, RimState::Offline);
+  cycle();
+  EXPECT_EQ(din.inputs()[0].code, 0u);
+  rack.set_rim_state(2, RimState::Online);
+  cycle();
+  cycle();
+  EXPECT_EQ(din.inputs()[0].code, 1u);
+  EXPECT_EQ(din.inputs()[1].code, 1u);
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1), before);
+}
