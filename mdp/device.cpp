@@ -4,6 +4,7 @@
 #include "mdp/device.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cerrno>
 #include <chrono>
@@ -68,6 +69,16 @@ struct Device::Impl final : DeviceRuntime {
   Impl(const Impl&) = delete;
   Impl& operator=(const Impl&) = delete;
   Device* self = nullptr;
+  // mailbox_pending()'s O(1) answer (issue 16: asked for every slave on every frame): false
+  // only while nothing can have become pending since the full check found nothing. Raised by
+  // everything that can make the CoE/FoE side pending: a CoE or FoE request, an Emergency, a
+  // state change, and the worker publishing a command's result (ParameterWriter::
+  // notify_results). Starts raised.
+  mutable std::atomic<bool> mailbox_hint{true};
+  void raise_mailbox_hint() {
+    std::atomic_thread_fence(std::memory_order_seq_cst);
+    mailbox_hint.store(true, std::memory_order_seq_cst);
+  }
   // --- What write_outputs/read_inputs touch, side by side (issue 16: the cyclic path of a
   // line of devices is bound by cache misses, not instructions).
   std::optional<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
@@ -279,6 +290,7 @@ struct Device::Impl final : DeviceRuntime {
     if (r == coe::diag::AddResult::Stored && history.emergency_enabled()) {
       const size_t before = sdo->emergency_overruns();
       sdo->queue_emergency(code, reg, data);
+      raise_mailbox_hint();
       queued = sdo->emergency_overruns() == before;
     }
     return r;
@@ -478,6 +490,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.default_payload = d.params->capture();
   d.store = std::make_unique<ParameterStore>(d.dir);
   d.writer = std::make_unique<ParameterWriter>(*d.store, *d.worker);
+  d.writer->notify_results(&d.mailbox_hint);
   d.image.emplace(d.od);
   attach_device_behaviour(d.config, d.od, d);
   d.history.bind(*d.od.find(coe::diag::kIndex));
@@ -508,11 +521,24 @@ std::span<const Module> Device::modules() const {
 }
 
 mailbox::Answer Device::coe_request(std::span<const uint8_t> request, std::span<uint8_t> reply) {
-  return impl_->sdo->handle(request, reply, impl_->state);
+  const mailbox::Answer a = impl_->sdo->handle(request, reply, impl_->state);
+  impl_->raise_mailbox_hint();  // e.g. an SDO Information list in fragments
+  return a;
 }
 
 bool Device::mailbox_pending() const {
-  return impl_->writer->has_results() || !impl_->foe->idle() || impl_->sdo->has_pending();
+  Impl& d = *impl_;
+  // Nothing can have become pending since the last full check found nothing (one load of a
+  // line the cyclic path touches anyway, instead of three objects elsewhere in memory).
+  if (!d.mailbox_hint.load(std::memory_order_seq_cst)) return false;
+  // Lower the hint, then look: whatever is published after the look raises it again.
+  d.mailbox_hint.store(false, std::memory_order_seq_cst);
+  std::atomic_thread_fence(std::memory_order_seq_cst);
+  if (d.writer->has_results() || !d.foe->idle() || d.sdo->has_pending()) {
+    d.mailbox_hint.store(true, std::memory_order_seq_cst);
+    return true;
+  }
+  return false;
 }
 
 size_t Device::coe_poll(std::span<uint8_t> reply) {
@@ -522,7 +548,9 @@ size_t Device::coe_poll(std::span<uint8_t> reply) {
 
 mailbox::Answer Device::foe_request(std::span<const uint8_t> request, size_t capacity,
                                     std::span<uint8_t> reply) {
-  return impl_->foe->handle_mailbox(request, capacity, reply);
+  const mailbox::Answer a = impl_->foe->handle_mailbox(request, capacity, reply);
+  impl_->raise_mailbox_hint();  // an open transfer (its timeout, a deferred read)
+  return a;
 }
 
 size_t Device::foe_poll(std::span<uint8_t> reply) {
@@ -606,6 +634,7 @@ uint16_t Device::request_state(EsmState from, EsmState to) {
 void Device::state_changed(EsmState from, EsmState to) {
   Impl& d = *impl_;
   d.state = to;
+  d.raise_mailbox_hint();
   if (to == EsmState::Init) {
     d.sdo->reset();
     d.foe->reset();

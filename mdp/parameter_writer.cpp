@@ -186,6 +186,12 @@ bool ParameterWriter::run_one() {
   if (!s.queued) {
     if (!s.result) results_.fetch_add(1, std::memory_order_acq_rel);
     s.result = std::move(result);
+    if (result_flag_ != nullptr) {
+      // The result is published before the flag rises (the owner clears the flag, fences,
+      // then looks at has_results(): one of the two sees the other).
+      std::atomic_thread_fence(std::memory_order_seq_cst);
+      result_flag_->store(true, std::memory_order_seq_cst);
+    }
   }
   cv_.notify_all();
   return !order_.empty();

@@ -74,6 +74,10 @@ class ParameterWriter final : private BackgroundWorker::Client {
   std::optional<Result> take(Job job);
   // True when some finished result waits to be taken (one atomic load: cheap to ask every cycle).
   bool has_results() const { return results_.load(std::memory_order_acquire) != 0; }
+  // `flag` (or nullptr) is set to true, after a full fence, whenever the worker has made a
+  // result available, so an owner can wait for results without asking has_results() every
+  // cycle (mdp::Device's mailbox hint, issue 16). Set before the first submit.
+  void notify_results(std::atomic<bool>* flag) { result_flag_ = flag; }
   // True while `job` is queued or running.
   bool busy(Job job) const;
   // Blocks until nothing is queued or running (tests, shutdown).
@@ -103,8 +107,9 @@ class ParameterWriter final : private BackgroundWorker::Client {
   std::condition_variable cv_;
   std::deque<Job> order_;
   std::array<Slot, kJobs> slots_;
-  std::atomic<unsigned> results_{0};  // results set and not yet taken
-  uint64_t finished_ = 0;             // jobs finished (under mutex_): Result::sequence
+  std::atomic<unsigned> results_{0};          // results set and not yet taken
+  uint64_t finished_ = 0;                     // jobs finished (under mutex_): Result::sequence
+  std::atomic<bool>* result_flag_ = nullptr;  // notify_results()
 };
 
 }  // namespace rackcat::mdp

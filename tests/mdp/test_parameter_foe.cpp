@@ -342,5 +342,32 @@ TEST_F(ParameterFoe, RestoreOutlivesAMailboxRestartAndTheDevice) {
   EXPECT_EQ(file_bytes(root / "gone" / "parameters.bin"), backup);
 }
 
+// mailbox_pending() answers from a hint (issue 16: O(1) per slave and frame) that everything
+// able to make the mailbox pending raises: here the worker finishing a command's file work
+// with no request in between, and an Emergency.
+TEST_F(ParameterFoe, MailboxPendingRisesWhenTheWorkerPublishesAResult) {
+  auto d = make("device");
+  SdoClient sdo(*d);
+  uint8_t buf[256];
+  {
+    rackcat::testing::WorkerGate gate(worker);
+    ASSERT_EQ(sdo.download(0xFBF2, 1, kStore), 0u);  // queued behind the gate
+    while (d->coe_poll(buf) > 0) {
+    }
+    EXPECT_FALSE(d->mailbox_pending());
+    EXPECT_FALSE(d->mailbox_pending());  // the hint is down: the same answer
+    gate.open();
+  }
+  { rackcat::testing::WorkerGate sync(worker); }  // the store has run
+  EXPECT_TRUE(d->mailbox_pending());              // without any request since
+  while (d->coe_poll(buf) > 0) {
+  }
+  EXPECT_FALSE(d->mailbox_pending());  // the result was taken
+  ASSERT_TRUE(d->raise_emergency(0x5000, 0x01));
+  EXPECT_TRUE(d->mailbox_pending());
+  EXPECT_GT(d->coe_poll(buf), 0u);
+  EXPECT_FALSE(d->mailbox_pending());
+}
+
 }  // namespace
 }  // namespace rackcat::mdp
