@@ -76,6 +76,7 @@ size_t Segment::process(std::span<uint8_t> frame) {
   for (size_t k = 0; k < slaves_.size(); ++k) {
     Slave& slave = *slaves_[k];
     Esc& esc = slave.esc();
+    if (k + 1 < slaves_.size()) slaves_[k + 1]->esc().prefetch();
     esc.begin_frame({t0 + offsets_[k].port0_ns, t0 + offsets_[k].port1_ns});
     for (size_t d = 0; d < layout_.count; ++d) {
       uint8_t* datagram = base + layout_.offset[d];

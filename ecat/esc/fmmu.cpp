@@ -170,56 +170,64 @@ uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, u
                              uint16_t fmmus) {
   if (fmmus == 0 || len == 0) return 0;
   const auto cmd = static_cast<Command>(command);
-  const bool may_read = cmd == Command::Lrd || cmd == Command::Lrw;
-  const bool may_write = cmd == Command::Lwr || cmd == Command::Lrw;
+  // The FMMU types (bit 0 read, bit 1 write) the command uses.
+  const uint8_t usable = cmd == Command::Lrw   ? 0x03
+                         : cmd == Command::Lrd ? 0x01
+                         : cmd == Command::Lwr ? 0x02
+                                               : 0x00;
   const uint64_t dg_lo = static_cast<uint64_t>(address) * 8;
   const uint64_t dg_hi = (static_cast<uint64_t>(address) + len) * 8 - 1;
 
-  // Each FMMU the command may use is intersected with the datagram once; the datagram bytes
-  // the reads fill and the writes take are tracked as two byte ranges (relative to data).
-  std::array<FmmuSpan, kFmmus> reads;   // NOLINT: filled up to read_count
-  std::array<FmmuSpan, kFmmus> writes;  // NOLINT: filled up to write_count
-  size_t read_count = 0;
-  size_t write_count = 0;
+  // Each FMMU the command may use is intersected with the datagram once (spans[n] for FMMU
+  // n); the datagram bytes the reads fill and the writes take are tracked as two byte ranges
+  // (relative to data).
+  std::array<FmmuSpan, kFmmus> spans;  // NOLINT: filled for the FMMUs in reads | writes
+  uint16_t reads = 0;
+  uint16_t writes = 0;
   uint64_t read_first = UINT64_MAX;
   uint64_t read_last = 0;
   uint64_t write_first = UINT64_MAX;
   uint64_t write_last = 0;
-  const uint64_t dg_byte0 = dg_lo / 8;
   for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const int index = std::countr_zero(m);
     const FmmuState& f = fmmu_[index];
-    const bool r = may_read && (f.type & 0x01) != 0;
-    const bool w = may_write && (f.type & 0x02) != 0;
-    if (!r && !w) continue;
-    FmmuSpan s{};
+    const uint8_t use = f.type & usable;
+    if (use == 0) continue;
+    FmmuSpan& s = spans[static_cast<size_t>(index)];
     if (!intersect_fmmu(f, dg_lo, dg_hi, s)) continue;
     s.fmmu = index;
-    if (r) {
-      reads[read_count++] = s;
-      read_first = std::min(read_first, s.lo / 8 - dg_byte0);
-      read_last = std::max(read_last, s.hi / 8 - dg_byte0);
+    const uint64_t first = s.lo / 8 - address;
+    const uint64_t last = s.hi / 8 - address;
+    const auto bit = static_cast<uint16_t>(1u << index);
+    if ((use & 0x01) != 0) {
+      reads = static_cast<uint16_t>(reads | bit);
+      read_first = std::min(read_first, first);
+      read_last = std::max(read_last, last);
     }
-    if (w) {
-      writes[write_count++] = s;
-      write_first = std::min(write_first, s.lo / 8 - dg_byte0);
-      write_last = std::max(write_last, s.hi / 8 - dg_byte0);
+    if ((use & 0x02) != 0) {
+      writes = static_cast<uint16_t>(writes | bit);
+      write_first = std::min(write_first, first);
+      write_last = std::max(write_last, last);
     }
   }
-  if (read_count == 0 && write_count == 0) return 0;
+  if ((reads | writes) == 0) return 0;
   // LRW reads the old memory into the datagram while writing the incoming data (ETG.1000.4
   // §5.4.3): when the bytes the reads fill meet the bytes the writes take, the incoming ones
   // are kept aside first (only those, at the same offsets).
   const uint8_t* incoming = data;
-  if (read_count != 0 && write_count != 0 && read_first <= write_last && write_first <= read_last) {
+  if (reads != 0 && writes != 0 && read_first <= write_last && write_first <= read_last) {
     std::memcpy(scratch_.data() + write_first, data + write_first, write_last - write_first + 1);
     incoming = scratch_.data();
   }
 
   bool read_done = false;
   bool write_done = false;
-  for (size_t i = 0; i < read_count; ++i) read_done |= fmmu_read(reads[i], dg_lo, data);
-  for (size_t i = 0; i < write_count; ++i) write_done |= fmmu_write(writes[i], dg_lo, incoming);
+  for (uint16_t m = reads; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+    read_done |= fmmu_read(spans[static_cast<size_t>(std::countr_zero(m))], dg_lo, data);
+  }
+  for (uint16_t m = writes; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+    write_done |= fmmu_write(spans[static_cast<size_t>(std::countr_zero(m))], dg_lo, incoming);
+  }
   // ETG.1000.4 §5.4.4: LRD and LWR count 1 per slave; LRW counts 1 for a read, 2 for a write.
   if (cmd == Command::Lrw) return static_cast<uint8_t>((read_done ? 1 : 0) + (write_done ? 2 : 0));
   return (read_done || write_done) ? 1 : 0;
