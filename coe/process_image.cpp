@@ -6,6 +6,56 @@
 #include "coe/bits.hpp"
 
 namespace rackcat::coe {
+namespace {
+
+// A copy between the process data and an object image. Whole bytes of at most 8 (every
+// mapped entry of a digital card, most records) are moved with fixed-size loads and stores
+// (two overlapping ones for 3, 5, 6, 7 bytes) instead of a libc call: the cyclic path does a
+// few of these per slave and frame (issue 16). Everything else: copy_bits.
+inline void copy_entry(uint8_t* dst, size_t dst_bit, const uint8_t* src, size_t src_bit,
+                       size_t nbits) {
+  if (((dst_bit | src_bit | nbits) % 8) == 0 && nbits != 0 && nbits <= 64) {
+    uint8_t* d = dst + dst_bit / 8;
+    const uint8_t* s = src + src_bit / 8;
+    const size_t n = nbits / 8;
+    if (n >= 4) {
+      uint32_t a = 0, b = 0;
+      std::memcpy(&a, s, 4);
+      std::memcpy(&b, s + n - 4, 4);
+      std::memcpy(d, &a, 4);
+      std::memcpy(d + n - 4, &b, 4);
+    } else if (n >= 2) {
+      uint16_t a = 0, b = 0;
+      std::memcpy(&a, s, 2);
+      std::memcpy(&b, s + n - 2, 2);
+      std::memcpy(d, &a, 2);
+      std::memcpy(d + n - 2, &b, 2);
+    } else {
+      d[0] = s[0];
+    }
+    return;
+  }
+  copy_bits(dst, dst_bit, src, src_bit, nbits);
+}
+
+// Zeroes the first n bytes (the input image before its copies), short ones without libc.
+inline void zero_bytes(uint8_t* p, size_t n) {
+  constexpr uint32_t kZero32 = 0;
+  constexpr uint16_t kZero16 = 0;
+  if (n > 8) {
+    std::memset(p, 0, n);
+  } else if (n >= 4) {
+    std::memcpy(p, &kZero32, 4);
+    std::memcpy(p + n - 4, &kZero32, 4);
+  } else if (n >= 2) {
+    std::memcpy(p, &kZero16, 2);
+    std::memcpy(p + n - 2, &kZero16, 2);
+  } else if (n == 1) {
+    p[0] = 0;
+  }
+}
+
+}  // namespace
 
 AbortCode ProcessImage::compile_direction(PdoDirection dir, Direction& out) {
   const uint16_t assign_index = dir == PdoDirection::Rx ? kRxPdoAssign : kTxPdoAssign;
@@ -86,7 +136,7 @@ void ProcessImage::write_outputs(std::span<const uint8_t> sm2) {
     if (c.pd_bit + c.bits > avail) {
       break;  // copies are in process-data order
     }
-    copy_bits(c.image, c.image_bit, sm2.data(), c.pd_bit, c.bits);
+    copy_entry(c.image, c.image_bit, sm2.data(), c.pd_bit, c.bits);
   }
   for (Object* obj : output_hooks_) {
     obj->hooks.after_write(*obj, ObjectHooks::kProcessData);
@@ -97,13 +147,13 @@ void ProcessImage::read_inputs(std::span<uint8_t> sm3) {
   for (Object* obj : input_hooks_) {
     obj->hooks.before_read(*obj, ObjectHooks::kProcessData);
   }
-  std::memset(sm3.data(), 0, std::min(sm3.size(), input_bytes()));
+  zero_bytes(sm3.data(), std::min(sm3.size(), input_bytes()));
   const size_t avail = sm3.size() * 8;
   for (const Copy& c : inputs_) {
     if (c.pd_bit + c.bits > avail) {
       break;
     }
-    copy_bits(sm3.data(), c.pd_bit, c.image, c.image_bit, c.bits);
+    copy_entry(sm3.data(), c.pd_bit, c.image, c.image_bit, c.bits);
   }
 }
 
