@@ -17,6 +17,7 @@ from pathlib import Path
 import os
 import shlex
 import shutil
+import struct
 import subprocess
 import time
 
@@ -25,6 +26,7 @@ import pytest
 from conftest import (BUILD, SlaveProcess, VethNamespace, go, require_root,  # noqa: F401
                       tshark_problems, wait_watchdog_safeop)
 from pdo_map import PdoEntry, PdoMap, get_bits, read_pdo_map, sdo_u, set_bits  # noqa: F401
+from raw_master import RawMaster
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem not installed (scripts/setup.sh)")
 
@@ -192,17 +194,17 @@ class Rackcat:
         return path.read_text().strip() if path.exists() else ""
 
     def _while_cycling(self, master, fn, *args):
-        # In OP the SM watchdog expires after 100 ms without frames; a control request may
-        # take longer, so the master keeps exchanging process data meanwhile. Starting the
-        # thread and curl can still stall this process for ~100 ms under load (measured at
-        # load 17): a test that needs the watchdog not to expire meanwhile sets it to seconds
-        # (0x0420, test_master_loss.py).
-        with concurrent.futures.ThreadPoolExecutor(1) as pool:
-            future = pool.submit(fn, *args)
-            while not future.done():
-                cycle(master)
-                time.sleep(CYCLE_S)
-            return future.result()
+        # In OP the SM watchdog expires after 100 ms without frames (0x0420's default); a
+        # control request may take longer, so the master keeps exchanging process data
+        # meanwhile. Starting the thread and curl can still stall this process for ~100 ms
+        # under load (measured at load 17), so the watchdog time is held at seconds meanwhile.
+        with pd_watchdog_held(self.iface):
+            with concurrent.futures.ThreadPoolExecutor(1) as pool:
+                future = pool.submit(fn, *args)
+                while not future.done():
+                    cycle(master)
+                    time.sleep(CYCLE_S)
+                return future.result()
 
     def ctl_while_cycling(self, master, method, path, body=None):
         return self._while_cycling(master, self.ctl, method, path, body)
@@ -220,6 +222,34 @@ class Rackcat:
                 if time.monotonic() > deadline:
                     raise
                 time.sleep(0.05)
+
+
+REG_WATCHDOG_DIVIDER = 0x0400
+REG_WATCHDOG_PROCESS_DATA = 0x0420
+HELD_WATCHDOG_S = 5.0  # 0x0420 holds at most 65535 units (6.5 s with the default divider)
+
+
+@contextlib.contextmanager
+def pd_watchdog_held(iface, seconds=HELD_WATCHDOG_S):
+    """Every slave's process-data watchdog time (0x0420) at `seconds` inside the block, its
+    old value restored afterwards (BWR from a raw socket beside the master). The ESC reads
+    0x0420 at each retrigger (ESC datasheet 0x0420), so the next process-data frame runs with
+    it; the unit is (0x0400 + 2) x 40 ns."""
+    raw = RawMaster(iface)
+    try:
+        wkc, old = raw.brd(REG_WATCHDOG_PROCESS_DATA, 2)
+        assert wkc >= 1, f"BRD 0x0420: working counter {wkc}"
+        wkc, divider = raw.brd(REG_WATCHDOG_DIVIDER, 2)
+        assert wkc >= 1, f"BRD 0x0400: working counter {wkc}"
+        unit_s = (struct.unpack("<H", divider)[0] + 2) * 40e-9
+        held = min(0xFFFF, round(seconds / unit_s))
+        assert raw.bwr(REG_WATCHDOG_PROCESS_DATA, struct.pack("<H", held)) >= 1
+        try:
+            yield
+        finally:
+            assert raw.bwr(REG_WATCHDOG_PROCESS_DATA, old) >= 1
+    finally:
+        raw.close()
 
 
 @pytest.fixture

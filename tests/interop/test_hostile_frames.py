@@ -10,21 +10,14 @@ through the rack's loopback wiring.
 
 Needs root (network namespace, veth, raw sockets); skips with a message otherwise.
 """
-import select
-import socket
 import struct
 import time
 
+from raw_master import APRD, APWR, LRW, RawMaster, dgram, ecat_datagrams, phys
 from rackcat_helpers import (go, loopback_entries, open_master, pysoem, rackcat, read_pdo_map,
                              to_op, wait_loopback)
 
 assert rackcat  # the fixture, imported for pytest
-
-ETHERTYPE_ECAT = 0x88A4
-PACKET_OUTGOING = 4  # sll_pkttype of frames this host sends (the tap sees them too)
-
-# Datagram commands (ETG.1000.4 Table 10).
-APRD, APWR, FPRD, FPWR, LRD, LRW = 0x01, 0x02, 0x04, 0x05, 0x0A, 0x0C
 
 # Registers (ESC datasheet section II; docs/ESC.md).
 REG_TYPE, REG_STATION = 0x0000, 0x0010
@@ -45,107 +38,11 @@ ABORT_TOGGLE = 0x05030000
 BIG = 0x6177
 
 
-def dgram(cmd, idx, address, data, more=False, length=None):
-    """One datagram: header (cmd, idx, 32-bit address = ADP/ADO or logical, length with the
-    "more follows" bit 15, IRQ), data, working counter 0."""
-    n = len(data) if length is None else length
-    return struct.pack("<BBIHH", cmd, idx, address, (n & 0x7FF) | (0x8000 if more else 0), 0) \
-        + bytes(data) + b"\0\0"
-
-
-def phys(adp, ado):
-    return (ado << 16) | adp
-
-
-class RawMaster:
-    """A raw socket on the master end of the veth pair: sends crafted frames, returns the
-    frame the segment sends back."""
-
-    def __init__(self, iface):
-        self.sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETHERTYPE_ECAT))
-        self.sock.bind((iface, ETHERTYPE_ECAT))
-        self.mac = self.sock.getsockname()[4]
-        self.idx = 0x80  # SOEM uses indices 0..15: stale replies never look like its own
-
-    def close(self):
-        self.sock.close()
-
-    def next_idx(self):
-        self.idx = 0x80 + (self.idx + 1) % 0x80
-        return self.idx
-
-    def frame(self, payload, ecat_len=None):
-        n = len(payload) if ecat_len is None else ecat_len
-        return b"\xff" * 6 + self.mac + struct.pack(">H", ETHERTYPE_ECAT) + \
-            struct.pack("<H", (n & 0x7FF) | 0x1000) + payload
-
-    def _drain(self):
-        while select.select([self.sock], [], [], 0)[0]:
-            self.sock.recv(4096)
-
-    def exchange(self, frame, timeout_s=1.0):
-        """Sends `frame` (unpadded: veth carries short frames as they are) and returns the
-        returned frame of the same length and first 18 bytes apart from the source MAC, or None."""
-        self._drain()
-        self.sock.send(frame)
-        deadline = time.monotonic() + timeout_s
-        while True:
-            left = deadline - time.monotonic()
-            if left <= 0 or not select.select([self.sock], [], [], left)[0]:
-                return None
-            data, addr = self.sock.recvfrom(4096)
-            if addr[2] == PACKET_OUTGOING:
-                continue
-            if len(data) == len(frame) and data[:6] == frame[:6] and data[12:18] == frame[12:18]:
-                return data
-
-    def datagram(self, cmd, address, data):
-        """One well-formed datagram in its own frame: (working counter, data)."""
-        idx = self.next_idx()
-        reply = self.exchange(self.frame(dgram(cmd, idx, address, data)))
-        assert reply is not None, f"no reply to command {cmd} at 0x{address:08X}"
-        n = len(data)
-        return struct.unpack_from("<H", reply, 26 + n)[0], reply[26:26 + n]
-
-    def aprd(self, ado, n, pattern=0):
-        return self.datagram(APRD, phys(0, ado), bytes([pattern]) * n)
-
-    def apwr(self, ado, data):
-        return self.datagram(APWR, phys(0, ado), data)[0]
-
-    def fprd(self, station, ado, n):
-        return self.datagram(FPRD, phys(station, ado), bytes(n))
-
-    def fpwr(self, station, ado, data):
-        return self.datagram(FPWR, phys(station, ado), data)[0]
-
-    def reg16(self, ado):
-        wkc, data = self.aprd(ado, 2)
-        assert wkc == 1, f"APRD 0x{ado:04X} working counter {wkc}"
-        return struct.unpack("<H", data)[0]
-
-    def error_counters(self):
-        """(port 0 RX error counter 0x0300, processing unit error counter 0x030C)."""
-        wkc, data = self.aprd(REG_RX_ERROR, 13)
-        assert wkc == 1
-        return data[0], data[12]
-
-
-def ecat_datagrams(reply):
-    """(command, idx, working counter, data) of each complete datagram of a returned frame."""
-    out, pos = [], 16
-    while pos + 12 <= len(reply):
-        cmd, idx, _addr, ln, _irq = struct.unpack_from("<BBIHH", reply, pos)
-        n = ln & 0x7FF
-        if pos + 12 + n > len(reply):
-            break
-        out.append((cmd, idx, struct.unpack_from("<H", reply, pos + 10 + n)[0],
-                    reply[pos + 10:pos + 10 + n]))
-        pos += 12 + n
-        if not ln & 0x8000:
-            break
-    return out
-
+def error_counters(raw):
+    """(port 0 RX error counter 0x0300, processing unit error counter 0x030C)."""
+    wkc, data = raw.aprd(REG_RX_ERROR, 13)
+    assert wkc == 1
+    return data[0], data[12]
 
 
 def op_and_process_data(master):
@@ -171,7 +68,7 @@ def test_malformed_frames_and_register_abuse_then_op(rackcat):
         assert esc_type[0] == 0x11, esc_type.hex()  # ET1100-class type byte
         # Writing 0x0300 clears every error counter, 0x030C clears on write (docs/ESC.md).
         assert raw.apwr(REG_RX_ERROR, bytes(14)) == 1
-        assert raw.error_counters() == (0, 0)
+        assert error_counters(raw) == (0, 0)
         expected_errors = 0
 
         def malformed(payload, ecat_len=None, processed=()):
@@ -186,12 +83,12 @@ def test_malformed_frames_and_register_abuse_then_op(rackcat):
             got = [wkc for _c, _i, wkc, _d in ecat_datagrams(reply)][:len(processed)]
             assert got == list(processed), f"working counters {got}, expected {processed}"
             expected_errors += 1
-            assert raw.error_counters() == (expected_errors, expected_errors)
+            assert error_counters(raw) == (expected_errors, expected_errors)
             return reply
 
         # Cut inside the EtherCAT header: no EtherCAT frame at all, not answered, not counted.
         assert raw.exchange(raw.frame(b"")[:15], timeout_s=0.3) is None
-        assert raw.error_counters() == (0, 0)
+        assert error_counters(raw) == (0, 0)
         # Truncated frame: the datagram header ends after 6 bytes; nothing is processed and the
         # bytes come back as they were.
         full = dgram(APRD, raw.next_idx(), phys(0, REG_TYPE), b"\0\0")
@@ -224,7 +121,7 @@ def test_malformed_frames_and_register_abuse_then_op(rackcat):
         assert raw.apwr(0xFFFC, b"\xA5" * 8) == 0
         assert raw.aprd(0xFFF0, 16) == (1, tail_before)
         assert raw.datagram(APRD, phys(0, 0xFFFF), b"\0\0")[0] == 0
-        assert raw.error_counters() == (expected_errors, expected_errors)
+        assert error_counters(raw) == (expected_errors, expected_errors)
 
         # Writes to read-only registers count (WKC 1, as on an ESC) and change nothing.
         wkc, ident = raw.aprd(REG_TYPE, 10)

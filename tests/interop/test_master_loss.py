@@ -30,8 +30,8 @@ import time
 
 from rackcat_helpers import (CYCLE_S, DO_MODULE, DEFAULT_MODULES, cycle, get_bits, go,
                              loopback_entries, open_master, pysoem, rackcat, set_bits, to_op)
-from test_hostile_frames import (LRD, REG_AL_STATUS, REG_FMMU, REG_STATION, RawMaster, dgram,
-                                 ecat_datagrams)
+from raw_master import LRD, RawMaster, dgram, ecat_datagrams
+from test_hostile_frames import REG_AL_STATUS, REG_FMMU, REG_STATION
 
 assert rackcat  # the fixture, imported for pytest
 
