@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Instructions per slave of one cyclic frame through `rackcat run`'s line of tiny racks, whole
+# stack (bench_rack_line: Segment::process of the master's LRW, then the firmware and
+# application round after_frame runs), counted by callgrind: the inclusive cost of
+# rack_line_cycle over its calls and the slaves. The in-process counterpart of op_bench's
+# per-slave figure; load-independent, so two builds can be compared on a busy machine. Needs
+# valgrind (Debian package valgrind).
+#
+#   scripts/callgrind_line.sh BENCH_RACK_LINE SLAVES...   e.g. build/bench/ecat/bench_rack_line 16 199
+# BENCHMARK=BM_RackLineCycle: outputs changing every frame (default BM_RackLineCycleSteady, the
+# master repeating them, as op_bench's replay); DC=1 adds the FRMW 0x0910 to the frame.
+set -euo pipefail
+if [ $# -lt 2 ]; then
+  echo "usage: $0 BENCH_RACK_LINE SLAVES..." >&2
+  exit 2
+fi
+bench=$1
+shift
+benchmark=${BENCHMARK:-BM_RackLineCycleSteady}
+dc=${DC:-0}
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+for n in "$@"; do
+  valgrind --tool=callgrind --callgrind-out-file="$out/cg.$n" "$bench" \
+    --benchmark_filter="^$benchmark/$n/$dc\$" --benchmark_min_time=0.02 >/dev/null 2>&1
+  # The callers' lines above rack_line_cycle's own line carry its inclusive cost and call count.
+  callgrind_annotate --inclusive=yes --threshold=100 --tree=caller "$out/cg.$n" |
+    awk -v n="$n" '
+      /^$/ { cost = 0; calls = 0; next }
+      / < .*\([0-9,]+x\)/ {
+        c = $1; gsub(/,/, "", c); match($0, /\(([0-9,]+)x\)/);
+        k = substr($0, RSTART + 1, RLENGTH - 3); gsub(/,/, "", k); cost += c; calls += k; next }
+      / \* .*rack_line_cycle/ && calls > 0 && !done {
+        printf "%d slaves: %.0f instructions per frame (%.0f per slave, %d frames)\n",
+               n, cost / calls, cost / calls / n, calls; done = 1 }'
+done
