@@ -8,7 +8,9 @@
 // for the device's lifetime (object_dictionary.hpp), as the process image's copies do.
 #pragma once
 
+#include <bit>
 #include <cstdint>
+#include <cstring>
 
 #include "base/little_endian.hpp"
 #include "coe/object_dictionary.hpp"
@@ -35,13 +37,13 @@ class EntrySlot {
         p_[0] = static_cast<uint8_t>(v);
         return;
       case 2:
-        le::put16(p_, static_cast<uint16_t>(v));
+        store<uint16_t>(v);
         return;
       case 4:
-        le::put32(p_, static_cast<uint32_t>(v));
+        store<uint32_t>(v);
         return;
       case 8:
-        le::put64(p_, v);
+        store<uint64_t>(v);
         return;
       default:
         if (obj_ != nullptr) obj_->set_u(sub_, v);
@@ -52,11 +54,11 @@ class EntrySlot {
       case 1:
         return p_[0];
       case 2:
-        return le::get16(p_);
+        return load<uint16_t>();
       case 4:
-        return le::get32(p_);
+        return load<uint32_t>();
       case 8:
-        return le::get64(p_);
+        return load<uint64_t>();
       default:
         return obj_ != nullptr ? obj_->get_u(sub_) : 0;
     }
@@ -64,6 +66,28 @@ class EntrySlot {
   explicit operator bool() const { return obj_ != nullptr; }
 
  private:
+  // One load/store of the whole entry on a little-endian host (the object image's byte order),
+  // byte by byte elsewhere; the image may hold it at any byte address.
+  template <class T>
+  void store(uint64_t v) {
+    if constexpr (std::endian::native == std::endian::little) {
+      const auto t = static_cast<T>(v);
+      std::memcpy(p_, &t, sizeof t);
+    } else {
+      le::put(p_, sizeof(T), v);
+    }
+  }
+  template <class T>
+  uint64_t load() const {
+    if constexpr (std::endian::native == std::endian::little) {
+      T t = 0;
+      std::memcpy(&t, p_, sizeof t);
+      return t;
+    } else {
+      return le::get(p_, sizeof(T));
+    }
+  }
+
   Object* obj_ = nullptr;
   uint8_t sub_ = 0;
   uint8_t* p_ = nullptr;
