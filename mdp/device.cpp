@@ -87,6 +87,11 @@ struct Device::Impl final : DeviceRuntime {
   // built, so the cyclic path does no dictionary or entry lookup.
   std::vector<coe::EntrySlot> latch_local_slots, latch_esc_slots;
   uint64_t last_sync_ns = 0;
+  // 0xF6F2 changes only with SYNC0: what its entries hold, so a round without a new SYNC0
+  // leaves the array (and its cache lines) alone. Stale until written, and again whenever the
+  // dictionary is reloaded (power_on_reset).
+  uint64_t latch_esc_value = 0;
+  bool latch_esc_stale = true;
   std::chrono::steady_clock::time_point power_on = std::chrono::steady_clock::now();
   RackConfig config;
   coe::ObjectDictionary od;
@@ -161,6 +166,7 @@ struct Device::Impl final : DeviceRuntime {
   // passes the checks.
   void power_on_reset(const ParameterWriter::Result& stored) {
     od.for_each([](Object& o) { o.load_defaults(); });
+    latch_esc_stale = true;
     history.bind(*od.find(coe::diag::kIndex));
     clock_offset = 0;
     load_report = stored.report;
@@ -665,7 +671,11 @@ void Device::read_inputs(std::span<uint8_t> sm3) {
   d.notify([&](CycleListener& l) { l.before_inputs(*this); });
   // 0xF6F0/0xF6F2: the input latch time of every module is this update.
   if (!d.latch_local_slots.empty()) Impl::set_array(d.latch_local_slots, d.uptime_us());
-  Impl::set_array(d.latch_esc_slots, d.last_sync_ns);
+  if (d.latch_esc_stale || d.latch_esc_value != d.last_sync_ns) {
+    Impl::set_array(d.latch_esc_slots, d.last_sync_ns);
+    d.latch_esc_value = d.last_sync_ns;
+    d.latch_esc_stale = false;
+  }
   d.image->read_inputs(sm3);
 }
 

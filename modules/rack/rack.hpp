@@ -173,32 +173,34 @@ class Rack : public mdp::CycleListener {
 
   mdp::Device& device_;
   RackOptions options_;
-  std::vector<std::unique_ptr<CardDriver>> drivers_;  // index = module number - 1
-  std::vector<uint8_t> module_rim_;                   // index = module number - 1
-  std::vector<UartDriver*> uarts_;
-  std::map<uint8_t, RimStatus> rims_;
-  // rims_[r].state == Online by RIM number, kept by set_rim_state: the cyclic path's test.
-  std::array<bool, 256> rim_online_{};
-  std::vector<uint16_t> fault_drivers_;          // drivers that detect wiring faults (by card kind)
-  bool fault_error_seen_ = false;                // a RIM went to ERROR for a wiring fault once
-  std::chrono::steady_clock::time_point start_;  // now() = 0 (the default clock)
-  std::map<std::string, std::unique_ptr<StateSpacePlant>> plants_;
-  ExceptionTree tree_;
-  std::unique_ptr<ChannelDiagnostics> channel_diag_;  // after drivers_ exist
-  StateRequestFn state_request_;
-
+  // What on_outputs/before_inputs read every cycle, side by side (issue 16: a line of racks is
+  // bound by the cache lines each slave's round touches, not by instructions).
   EsmState state_ = EsmState::Init;
   bool outputs_valid_ = false;
+  bool dirty_ = true;
+  bool fault_error_seen_ = false;  // a RIM went to ERROR for a wiring fault once
   double t0_ = 0.0;
   double last_t_ = 0.0;
   double plant_t_ = 0.0;
+  double cpu_next_publish_ = 0.0;
+  std::vector<std::unique_ptr<CardDriver>> drivers_;  // index = module number - 1
+  std::vector<uint8_t> module_rim_;                   // index = module number - 1
+  std::vector<uint16_t> fault_drivers_;  // drivers that detect wiring faults (by card kind)
+  std::vector<uint32_t> last_safe_, last_unsafe_;
+  std::unique_ptr<ChannelDiagnostics> channel_diag_;  // after drivers_ exist
+  std::map<std::string, std::unique_ptr<StateSpacePlant>> plants_;
+  std::chrono::steady_clock::time_point start_;  // now() = 0 (the default clock)
+  // rims_[r].state == Online by RIM number, kept by set_rim_state: the cyclic path's test.
+  std::array<bool, 256> rim_online_{};
+
+  std::vector<UartDriver*> uarts_;
+  std::map<uint8_t, RimStatus> rims_;
+  ExceptionTree tree_;
+  StateRequestFn state_request_;
   double cpu_fan_rpm_;
   double cpu_temp_;
   double cpu_temp_published_ = 0.0;
-  double cpu_next_publish_ = 0.0;
   bool over_temperature_ = false;
-  bool dirty_ = true;
-  std::vector<uint32_t> last_safe_, last_unsafe_;
 };
 
 }  // namespace rackcat::modules

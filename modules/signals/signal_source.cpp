@@ -215,7 +215,7 @@ std::string ReplaySource::describe() const {
 
 LoopbackSource::LoopbackSource(const double* output, std::string output_name, double gain,
                                double offset)
-    : output_(output), name_(std::move(output_name)), gain_(gain), offset_(offset) {
+    : output_(output), gain_(gain), offset_(offset), name_(std::move(output_name)) {
   if (output == nullptr) throw std::invalid_argument("loopback: no output channel");
 }
 

@@ -130,6 +130,19 @@ TEST_F(Commands, CompleteAccessWriteBackOfACommandObjectExecutesNothing) {
   device->remove_listener(&l);
 }
 
+// The device reset loads every object's power-on value, the input latch times too; the next
+// input update writes the last SYNC0's time into 0xF6F2 again although no SYNC0 came since.
+TEST_F(Commands, InputLatchEscTimeIsBackAfterADeviceReset) {
+  device->sync_event(0, 123456789);
+  std::vector<uint8_t> sm3(device->input_bytes());
+  device->read_inputs(sm3);
+  ASSERT_EQ(sdo->read_u(0xF6F2, 1), 123456789u);
+  EXPECT_EQ(command(0xFBF0, kDeviceReset), 0u);
+  EXPECT_EQ(sdo->read_u(0xF6F2, 1), 0u);
+  device->read_inputs(sm3);
+  EXPECT_EQ(sdo->read_u(0xF6F2, 1), 123456789u);
+}
+
 TEST_F(Commands, WrongCommandBytesAreIncompatibleAndChangeNothing) {
   EXPECT_EQ(sdo->download(0xFBF2, 1, std::vector<uint8_t>{0x73, 0x61, 0x76, 0x66}), kIncompatible);
   EXPECT_FALSE(std::filesystem::exists(device->parameter_file()));

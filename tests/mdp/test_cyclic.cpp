@@ -99,6 +99,13 @@ TEST_F(Cyclic, InputLatchTimestampsFollowTheInputUpdate) {
   device->read_inputs(sm3);
   const auto* esc = device->dictionary().find(0xF6F2);
   for (uint8_t s = 1; s <= esc->sub0(); ++s) EXPECT_EQ(esc->get_u(s), 123456789u);
+  // Rounds without a new SYNC0 keep it; the next SYNC0's time is there after the next update.
+  device->read_inputs(sm3);
+  for (uint8_t s = 1; s <= esc->sub0(); ++s) EXPECT_EQ(esc->get_u(s), 123456789u);
+  device->sync_event(0, 223456789);
+  for (uint8_t s = 1; s <= esc->sub0(); ++s) EXPECT_EQ(esc->get_u(s), 123456789u);
+  device->read_inputs(sm3);
+  for (uint8_t s = 1; s <= esc->sub0(); ++s) EXPECT_EQ(esc->get_u(s), 223456789u);
 }
 
 TEST_F(Cyclic, ModuleObjectIndicesFollowTheNumberingRule) {
