@@ -2,11 +2,14 @@
 // and system time, offset, delay, the system-time difference and control loop driven by the
 // master's ARMW/FRMW of 0x0910, and the SYNC0/SYNC1 cyclic unit.
 #include <algorithm>
+#include <array>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 
 #include "base/little_endian.hpp"
 #include "ecat/esc/esc.hpp"
+#include "ecat/frame.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -51,6 +54,56 @@ void Esc::dc_prepare_system_time_read() {
   le::put64(&mem_[reg::kDcSystemTime], system_time(pass_.port0_ns));
 }
 
+uint8_t Esc::system_time_datagram(Command cmd, uint8_t* data, uint16_t len, bool addressed) {
+  switch (cmd) {
+    case Command::Armw:
+    case Command::Frmw:
+      // ETG.1000.4 §5.4.3: the addressed slave reads, every other slave writes.
+      if (addressed) {
+        read_system_time(data, len, false);
+        return 1;
+      }
+      return write_system_time(data, len) ? 1 : 0;
+    case Command::Aprd:
+    case Command::Fprd:
+    case Command::Brd:
+      read_system_time(data, len, cmd == Command::Brd);
+      return 1;
+    case Command::Apwr:
+    case Command::Fpwr:
+    case Command::Bwr:
+      return write_system_time(data, len) ? 1 : 0;
+    case Command::Aprw:
+    case Command::Fprw:
+    case Command::Brw: {
+      // The old content goes back (ORed for BRW) while the incoming time is compared: WKC +1
+      // for the read, +2 for the write (ETG.1000.4 §5.4.4).
+      std::array<uint8_t, 8> incoming{};
+      std::memcpy(incoming.data(), data, len);
+      read_system_time(data, len, cmd == Command::Brw);
+      return static_cast<uint8_t>(1 + (write_system_time(incoming.data(), len) ? 2 : 0));
+    }
+    default:
+      return 0;
+  }
+}
+
+bool Esc::write_system_time(const uint8_t* src, uint16_t len) {
+  if (write_protection_active()) return protected_write(reg::kDcSystemTime, src, len);
+  dc_compare_system_time(src, len);
+  return true;
+}
+
+void Esc::read_system_time(uint8_t* dst, uint16_t len, bool merge_or) {
+  dc_prepare_system_time_read();
+  const uint8_t* src = &mem_[reg::kDcSystemTime];
+  if (merge_or) {
+    for (uint16_t i = 0; i < len; ++i) dst[i] |= src[i];
+  } else {
+    std::memcpy(dst, src, len);
+  }
+}
+
 void Esc::dc_system_time_written(uint16_t address, const uint8_t* src, uint16_t len) {
   // Only a write starting at 0x0910 carries a system time: 4 bytes compare the low 32 bits,
   // 8 bytes all 64 (ESC datasheet 0x0910 "write: compare with local copy").
@@ -58,15 +111,19 @@ void Esc::dc_system_time_written(uint16_t address, const uint8_t* src, uint16_t 
   const uint32_t offset = reg::kDcSystemTime - address;
   const uint32_t available = len - offset;
   if (available < 4) return;
+  dc_compare_system_time(src + offset, available >= 8 ? 8 : 4);
+}
+
+void Esc::dc_compare_system_time(const uint8_t* received, uint16_t len) {
   const uint64_t local = system_time(pass_.port0_ns);
   const uint32_t delay = le::get32(&mem_[reg::kDcSystemTimeDelay]);
   int64_t diff;
-  if (available >= 8) {
-    const uint64_t received = le::get64(src + offset) + delay;
-    diff = static_cast<int64_t>(received - local);
+  if (len >= 8) {
+    const uint64_t with_delay = le::get64(received) + delay;
+    diff = static_cast<int64_t>(with_delay - local);
   } else {
-    const uint32_t received = le::get32(src + offset) + delay;
-    diff = static_cast<int32_t>(received - static_cast<uint32_t>(local));
+    const uint32_t with_delay = le::get32(received) + delay;
+    diff = static_cast<int32_t>(with_delay - static_cast<uint32_t>(local));
   }
   // 0x092C: bit 31 set when the local copy is smaller than the received time, bits 30:0 the
   // magnitude.

@@ -185,6 +185,7 @@ uint8_t Esc::process_physical(uint8_t command, uint16_t address, uint8_t* data, 
   if (!addressed && !rmw) return 0;
   // An access crossing the end of the 64 KiB address space is ignored (no WKC).
   if (static_cast<uint32_t>(address) + len > reg::kAddressSpace) return 0;
+  if (is_system_time_access(address, len)) return system_time_datagram(cmd, data, len, addressed);
   switch (cmd) {
     case Command::Aprd:
     case Command::Fprd:

@@ -22,6 +22,7 @@
 
 #include "ecat/clock.hpp"
 #include "ecat/esc/esc_memory.hpp"
+#include "ecat/frame.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -220,8 +221,11 @@ class Esc {
   void dc_registers_written(uint16_t address, const uint8_t* src, uint16_t len);
   void before_register_read(uint16_t address, uint16_t len);
   void after_register_read(uint16_t address, uint16_t len);
-  // write_protection.cpp
-  bool write_protection_active() const;
+  // write_protection.cpp; this check runs on every write.
+  bool write_protection_active() const {
+    return ((mem_[reg::kWriteProtection] & 0x01) && !register_write_enabled_) ||
+           ((mem_[reg::kEscWriteProtection] & 0x01) && !esc_write_enabled_);
+  }
   bool write_allowed(uint32_t address) const;
   void write_enables_written(uint16_t address, const uint8_t* src, uint16_t len);
   bool protected_write(uint16_t address, const uint8_t* src, uint16_t len);
@@ -303,6 +307,25 @@ class Esc {
   // distributed_clock.cpp
   void dc_latch_receive_times();
   void dc_system_time_written(uint16_t address, const uint8_t* src, uint16_t len);
+  // The system time 0x0910 alone, 4 or 8 bytes, with no SyncManager over it: the access every
+  // DC master makes every cycle (FRMW/ARMW, ETG.1000.4 §9). For these bytes the register rules
+  // come down to one read and one compare (0x0910 has no ECAT-writable bit, raises no event
+  // and shares its range with no other register), which system_time_datagram does without
+  // the generic register path (physical_read/physical_write); same data, WKC and effects.
+  bool is_system_time_access(uint16_t address, uint16_t len) const {
+    return address == reg::kDcSystemTime && (len == 4 || len == 8) &&
+           static_cast<uint32_t>(reg::kDcSystemTime) + len <= sm_first_byte_;
+  }
+  uint8_t system_time_datagram(Command cmd, uint8_t* data, uint16_t len, bool addressed);
+  // ESC datasheet 0x0910 read: the system time when the frame passed, latched into the
+  // register and copied (ORed for BRD/BRW) into `dst`.
+  void read_system_time(uint8_t* dst, uint16_t len, bool merge_or);
+  // ESC datasheet 0x0910 write, through register write protection; false when discarded.
+  bool write_system_time(const uint8_t* src, uint16_t len);
+  // "Write: compare with local copy": `received` (4 bytes: the low 32 bits, 8 bytes: all 64)
+  // plus the delay 0x0928 against the local system time; the difference goes to 0x092C and
+  // drives the control loop.
+  void dc_compare_system_time(const uint8_t* received, uint16_t len);
   void dc_activation_written();
   void dc_prepare_system_time_read();
   uint64_t clock_of_system_time(uint64_t system_time) const;

@@ -16,11 +16,6 @@ namespace {
 constexpr uint16_t kUserRam = 0x0F80;
 }
 
-bool Esc::write_protection_active() const {
-  return ((mem_[reg::kWriteProtection] & 0x01) && !register_write_enabled_) ||
-         ((mem_[reg::kEscWriteProtection] & 0x01) && !esc_write_enabled_);
-}
-
 bool Esc::write_allowed(uint32_t address) const {
   if (address == reg::kWriteEnable || address == reg::kEscWriteEnable) return true;
   if ((mem_[reg::kEscWriteProtection] & 0x01) && !esc_write_enabled_) return false;

@@ -3,7 +3,12 @@
 // loop, SYNC0/SYNC1 generation on a manual clock.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cstdlib>
+
 #include "ecat/registers.hpp"
+#include "tests/ecat/chip_master.hpp"
 #include "tests/ecat/test_master.hpp"
 
 namespace rackcat::ecat::test {
@@ -88,6 +93,118 @@ TEST_F(DriftTest, HugeDifferenceIsReportedButNotFollowed) {
   line.master->send(Command::Bwr, 0, 0x0910, {0, 0, 0, 0});
   EXPECT_EQ(line.esc(1).local_time(line.clock.now_ns()), before);
   EXPECT_NE(line.master->fprd32(Line::station(1), 0x092C), 0u);
+}
+
+// The ARMW/FRMW of the system time that a DC master sends every cycle (ETG.1000.4 §9), checked
+// against the ESC datasheet rule for 0x0910 "write: compare with local copy": the reference
+// (the addressed slave) returns its system time; every other slave adds its delay 0x0928 to
+// the received time (all 64 bits, or the low 32 for a 4-byte access), reports the difference
+// to its own system time in 0x092C (bit 31: local copy smaller, bits 30:0 the magnitude) and
+// moves its clock half-way towards the reference when the difference is below 1 ms.
+struct SystemTimeCompare : ::testing::Test {
+  static constexpr size_t kSlaves = 5;
+  // Received time + delay - local system time per slave (slave 0 is the reference); the last
+  // is small in its low 32 bits only.
+  static constexpr std::array<int64_t, kSlaves> kDiff = {0, 500, -301, 1,
+                                                         500'000 - (int64_t{7} << 32)};
+  static constexpr std::array<uint32_t, kSlaves> kDelay = {0, 330, 660, 990, 1320};
+
+  SystemTimeCompare() : line(kSlaves) {
+    line.to_preop();
+    line.clock.advance(3'000'000'000);
+    const uint64_t reference = system_time(0);
+    for (size_t k = 1; k < kSlaves; ++k) {
+      const uint64_t wanted = reference + kDelay[k] - static_cast<uint64_t>(kDiff[k]);
+      line.master->fpwr32(Line::station(k), reg::kDcSystemTimeDelay, kDelay[k]);
+      line.master->fpwr64(Line::station(k), reg::kDcSystemTimeOffset,
+                          wanted - system_time(k) + offset(k));
+    }
+  }
+  uint64_t system_time(size_t k) { return line.master->fprd64(Line::station(k), 0x0910); }
+  uint64_t offset(size_t k) { return line.master->fprd64(Line::station(k), 0x0920); }
+  uint32_t difference(size_t k) { return line.master->fprd32(Line::station(k), 0x092C); }
+  static uint32_t expected_difference(int64_t diff) {
+    uint32_t v = static_cast<uint32_t>(std::min<uint64_t>(std::llabs(diff), 0x7FFFFFFF));
+    return diff > 0 ? v | 0x80000000u : v;
+  }
+  static int64_t expected_step(int64_t diff) {
+    if (diff == 0 || diff <= -1'000'000 || diff >= 1'000'000) return 0;
+    return diff / 2 != 0 ? diff / 2 : diff;
+  }
+  // The difference a compare of `bytes` bytes sees for slave k.
+  static int64_t seen(size_t k, uint16_t bytes) {
+    return bytes == 8 ? kDiff[k] : static_cast<int32_t>(static_cast<uint32_t>(kDiff[k]));
+  }
+  // Sends `cmd` (the reference addressed) over `len` bytes at `ado` and checks every slave.
+  void compare(Command cmd, uint16_t ado, uint16_t len, uint16_t bytes) {
+    std::array<uint64_t, kSlaves> before{};
+    for (size_t k = 0; k < kSlaves; ++k) before[k] = system_time(k);
+    const std::vector<uint8_t> untouched = {line.esc(1).memory().begin() + 0x0910,
+                                            line.esc(1).memory().begin() + 0x0918};
+    const uint16_t adp = cmd == Command::Armw ? 0 : Line::station(0);
+    const Reply r = line.master->send(cmd, adp, ado, std::vector<uint8_t>(len, 0xEE));
+    EXPECT_EQ(r.wkc, kSlaves);  // the reference reads, every other slave writes
+    const size_t at = 0x0910 - ado;
+    uint64_t returned = 0;
+    for (size_t i = 0; i < bytes; ++i) returned |= static_cast<uint64_t>(r.data[at + i]) << 8 * i;
+    const uint64_t mask = bytes == 8 ? ~uint64_t{0} : 0xFFFFFFFFu;
+    EXPECT_EQ(returned, before[0] & mask);
+    // A compare does not latch: 0x0910 keeps what the last read latched.
+    EXPECT_EQ(std::vector<uint8_t>(line.esc(1).memory().begin() + 0x0910,
+                                   line.esc(1).memory().begin() + 0x0918),
+              untouched);
+    for (size_t k = 1; k < kSlaves; ++k) {
+      SCOPED_TRACE(k);
+      EXPECT_EQ(difference(k), expected_difference(seen(k, bytes)));
+      EXPECT_EQ(system_time(k), before[k] + static_cast<uint64_t>(expected_step(seen(k, bytes))));
+    }
+  }
+  Line line;
+};
+
+TEST_F(SystemTimeCompare, FrmwOf64Bits) {
+  compare(Command::Frmw, 0x0910, 8, 8);
+}
+TEST_F(SystemTimeCompare, FrmwOf32Bits) {
+  compare(Command::Frmw, 0x0910, 4, 4);
+}
+TEST_F(SystemTimeCompare, ArmwOf64Bits) {
+  compare(Command::Armw, 0x0910, 8, 8);
+}
+TEST_F(SystemTimeCompare, ArmwOf32Bits) {
+  compare(Command::Armw, 0x0910, 4, 4);
+}
+TEST_F(SystemTimeCompare, FrmwAroundTheSystemTimeComparesAll64Bits) {
+  compare(Command::Frmw, 0x090C, 12, 8);  // receive time port 3, then the system time
+}
+TEST_F(SystemTimeCompare, FrmwFromTheMiddleComparesNothing) {
+  const uint32_t before = difference(1);
+  EXPECT_EQ(line.master->send(Command::Frmw, Line::station(0), 0x0914, {0, 0, 0, 0}).wkc, kSlaves);
+  EXPECT_EQ(difference(1), before);
+}
+
+TEST_F(SystemTimeCompare, WriteProtectedSlaveDiscardsTheCompare) {
+  // Register write protection (0x0021 bit 0) without the enable 0x0020 in the same frame: the
+  // write is discarded and gets no working counter.
+  EXPECT_EQ(line.master->fpwr8(Line::station(1), reg::kWriteProtection, 0x01), 1);
+  const uint64_t before = system_time(1);
+  const uint32_t diff_before = difference(1);
+  const Reply r =
+      line.master->send(Command::Frmw, Line::station(0), 0x0910, std::vector<uint8_t>(8, 0));
+  EXPECT_EQ(r.wkc, kSlaves - 1);
+  EXPECT_EQ(difference(1), diff_before);
+  EXPECT_EQ(system_time(1), before);
+  EXPECT_EQ(difference(2), expected_difference(kDiff[2]));
+}
+
+TEST(DistributedClock, SyncManagerOverTheSystemTimeKeepsItsBufferRules) {
+  // A mailbox the master writes placed over 0x0910 (ETG.1000.4 §6.7.1): the first write
+  // fills it, the next is refused (no WKC) until the PDI has read it.
+  ChipMaster chip;
+  chip.sm(0, 0x0910, 8, 0x26);
+  EXPECT_EQ(chip.datagram(Command::Apwr, 0, 0x0910, std::vector<uint8_t>(8, 0)).second, 1);
+  EXPECT_EQ(chip.esc.read8(0x0805) & 0x08, 0x08);
+  EXPECT_EQ(chip.datagram(Command::Apwr, 0, 0x0910, std::vector<uint8_t>(8, 0)).second, 0);
 }
 
 TEST(DistributedClock, Sync0FiresEveryCycle) {
