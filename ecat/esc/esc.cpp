@@ -73,6 +73,8 @@ void Esc::power_on_reset() {
   fmmu_.fill(FmmuState{});
   fmmu_active_mask_ = 0;
   fmmu_meeting_known_ = 0;
+  fmmu_whole_mask_ = 0;
+  whole_plan_.valid = false;
   if (fmmu_generation_ != nullptr) ++*fmmu_generation_;
 
   sii_reload_config_area();

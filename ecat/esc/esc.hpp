@@ -261,6 +261,33 @@ class Esc {
   // whole range. Recomputed whenever an FMMU or SM is (re)loaded; fmmu_meeting_known_ bit n
   // says fmmu_meeting_[n] holds it (else the access looks the SMs up, sm_meeting).
   void refresh_fmmu_meetings();
+  // The cyclic process data: bit n of fmmu_whole_mask_ says FMMU n maps whole bytes of
+  // process RAM at the same bit positions (start bits 0, stop bit 7; ETG.1000.4 §6.6) onto
+  // exactly the buffer of one enabled SM that shares no byte with another, or onto bytes no SM
+  // meets (kept with the meetings). A logical datagram that covers every such FMMU it meets
+  // completely is served by process_whole_fmmus: per FMMU one copy and one whole-buffer
+  // hand-over, in the order and with the effects of the bit-wise walk. Returns the working
+  // counter, or -1 when an FMMU the datagram meets is not whole or only partly covered.
+  int process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data,
+                          uint16_t len, uint16_t fmmus);
+  // What process_whole_fmmus works out for a datagram from the FMMU configuration alone, kept
+  // for the last one (the cyclic frame repeats it) until an FMMU or SM is (re)loaded.
+  struct WholePlan {
+    bool valid = false;
+    uint32_t address = 0;
+    uint16_t len = 0;
+    uint16_t fmmus = 0;
+    uint8_t usable = 0;
+    bool whole = false;  // every FMMU the datagram meets is whole and completely covered
+    uint16_t reads = 0;
+    uint16_t writes = 0;
+    bool keep_incoming = false;  // the reads fill bytes the writes take
+    uint32_t write_first = 0;    // datagram bytes the writes take: [write_first, write_end)
+    uint32_t write_end = 0;
+  };
+  void plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus);
+  bool whole_fmmu_read(int index, uint8_t* dst);
+  bool whole_fmmu_write(int index, const uint8_t* src);
   // sync_manager.cpp: buffer semantics.
   void reload_sm(int index);
   bool sm_allows_read(uint16_t address, uint16_t len);
@@ -278,6 +305,13 @@ class Esc {
   // the master for an SM it writes, the PDI for one it reads) or by the side that drains it:
   // opens the buffer on its first byte, completes it on its last (status 0x0805+8n, events).
   void sm_buffer_access(int index, uint32_t address, uint32_t end, bool filler);
+  // The same with the access's place in the buffer known: `first` = it holds the buffer's first
+  // byte, `last` its last byte.
+  void sm_hand_over(int index, bool first, bool last, bool filler);
+  // One master access that is exactly SM n's whole buffer (in process RAM): what
+  // sm_allows_read/sm_allows_write, the copy and sm_after_read/sm_after_write do for it.
+  bool sm_master_read_buffer(int index, uint8_t* dst);
+  bool sm_master_write_buffer(int index, const uint8_t* src);
   // Whether the side that fills SM n's buffer may write it now (active, a mailbox not full).
   bool sm_takes_write(int index) const;
   uint8_t& sm_status(int index) { return mem_[reg::sm::base(index) + reg::kSmStatusOffset]; }
@@ -352,6 +386,8 @@ class Esc {
   uint16_t fmmu_active_mask_ = 0;  // bit n: FMMU n activated with a read or write type
   std::array<uint16_t, kFmmus> fmmu_meeting_{};
   uint16_t fmmu_meeting_known_ = 0;
+  uint16_t fmmu_whole_mask_ = 0;
+  WholePlan whole_plan_{};
   uint32_t* fmmu_generation_ = nullptr;
 
   bool port1_link_ = false;

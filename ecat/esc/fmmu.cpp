@@ -7,6 +7,7 @@
 
 #include "base/little_endian.hpp"
 #include "ecat/esc/esc.hpp"
+#include "ecat/esc/short_copy.hpp"
 #include "ecat/frame.hpp"
 #include "ecat/registers.hpp"
 
@@ -20,37 +21,6 @@ inline uint8_t byte_mask(uint64_t byte, uint64_t lo, uint64_t hi) {
   if (byte == lo / 8) mask = static_cast<uint8_t>(mask & (0xFF << (lo % 8)));
   if (byte == hi / 8) mask = static_cast<uint8_t>(mask & (0xFF >> (7 - hi % 8)));
   return mask;
-}
-
-// Copies n bytes without a library call for the short runs of process data (a few bytes per
-// slave): two fixed-size, possibly overlapping moves; longer runs go to memcpy.
-inline void copy_bytes(uint8_t* to, const uint8_t* from, uint64_t n) {
-  if (n >= 8 && n <= 16) {
-    uint64_t a = 0;
-    uint64_t b = 0;
-    std::memcpy(&a, from, 8);
-    std::memcpy(&b, from + n - 8, 8);
-    std::memcpy(to, &a, 8);
-    std::memcpy(to + n - 8, &b, 8);
-  } else if (n >= 4 && n < 8) {
-    uint32_t a = 0;
-    uint32_t b = 0;
-    std::memcpy(&a, from, 4);
-    std::memcpy(&b, from + n - 4, 4);
-    std::memcpy(to, &a, 4);
-    std::memcpy(to + n - 4, &b, 4);
-  } else if (n >= 2 && n < 4) {
-    uint16_t a = 0;
-    uint16_t b = 0;
-    std::memcpy(&a, from, 2);
-    std::memcpy(&b, from + n - 2, 2);
-    std::memcpy(to, &a, 2);
-    std::memcpy(to + n - 2, &b, 2);
-  } else if (n == 1) {
-    *to = *from;
-  } else if (n > 16) {
-    std::memcpy(to, from, n);
-  }
 }
 
 // Byte-aligned mapping (the physical bit of a logical bit has the same position in its byte):
@@ -122,6 +92,8 @@ void Esc::reload_fmmu(int index) {
 
 void Esc::refresh_fmmu_meetings() {
   fmmu_meeting_known_ = 0;
+  fmmu_whole_mask_ = 0;
+  whole_plan_.valid = false;
   for (int n = 0; n < kFmmus; ++n) {
     const FmmuState& f = fmmu_[n];
     if (!f.maps) continue;
@@ -137,10 +109,15 @@ void Esc::refresh_fmmu_meetings() {
       const SmState& s = sm_[std::countr_zero(meeting)];
       known = s.start <= first && end <= static_cast<uint32_t>(s.start) + s.length;
     }
-    if (known) {
-      fmmu_meeting_[n] = meeting;
-      fmmu_meeting_known_ = static_cast<uint16_t>(fmmu_meeting_known_ | (1u << n));
-    }
+    if (!known) continue;
+    fmmu_meeting_[n] = meeting;
+    fmmu_meeting_known_ = static_cast<uint16_t>(fmmu_meeting_known_ | (1u << n));
+    const bool whole_bytes = f.logical_start_bit == 0 && f.logical_stop_bit == 7 &&
+                             f.physical_start_bit == 0 && first >= reg::kProcessRam;
+    const bool exact = meeting == 0 || (sm_[std::countr_zero(meeting)].start == first &&
+                                        sm_[std::countr_zero(meeting)].length == end - first);
+    if (whole_bytes && exact)
+      fmmu_whole_mask_ = static_cast<uint16_t>(fmmu_whole_mask_ | (1u << n));
   }
 }
 
@@ -175,6 +152,10 @@ uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, u
                          : cmd == Command::Lrd ? 0x01
                          : cmd == Command::Lwr ? 0x02
                                                : 0x00;
+  if ((fmmus & fmmu_whole_mask_) != 0) {
+    const int wkc = process_whole_fmmus(cmd, usable, address, data, len, fmmus);
+    if (wkc >= 0) return static_cast<uint8_t>(wkc);
+  }
   const uint64_t dg_lo = static_cast<uint64_t>(address) * 8;
   const uint64_t dg_hi = (static_cast<uint64_t>(address) + len) * 8 - 1;
 
@@ -231,6 +212,92 @@ uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, u
   // ETG.1000.4 §5.4.4: LRD and LWR count 1 per slave; LRW counts 1 for a read, 2 for a write.
   if (cmd == Command::Lrw) return static_cast<uint8_t>((read_done ? 1 : 0) + (write_done ? 2 : 0));
   return (read_done || write_done) ? 1 : 0;
+}
+
+void Esc::plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus) {
+  WholePlan& p = whole_plan_;
+  p = WholePlan{true, address, len, fmmus, usable};
+  const uint64_t dg_end = static_cast<uint64_t>(address) + len;
+  uint32_t read_first = UINT32_MAX;
+  uint32_t read_end = 0;
+  uint32_t write_first = UINT32_MAX;
+  uint32_t write_end = 0;
+  for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+    const int index = std::countr_zero(m);
+    const FmmuState& f = fmmu_[index];
+    const uint8_t use = f.type & usable;
+    if (use == 0) continue;
+    const uint64_t lo = f.logical_start;
+    const uint64_t end = lo + f.length;
+    if (end <= address || lo >= dg_end) continue;  // does not meet the datagram
+    if ((fmmu_whole_mask_ & (1u << index)) == 0 || lo < address || end > dg_end) {
+      p.reads = p.writes = 0;
+      return;  // the bit-wise walk
+    }
+    const auto first = static_cast<uint32_t>(lo - address);
+    const auto last_end = static_cast<uint32_t>(end - address);
+    const auto bit = static_cast<uint16_t>(1u << index);
+    if ((use & 0x01) != 0) {
+      p.reads = static_cast<uint16_t>(p.reads | bit);
+      read_first = std::min(read_first, first);
+      read_end = std::max(read_end, last_end);
+    }
+    if ((use & 0x02) != 0) {
+      p.writes = static_cast<uint16_t>(p.writes | bit);
+      write_first = std::min(write_first, first);
+      write_end = std::max(write_end, last_end);
+    }
+  }
+  p.whole = true;
+  // As process_logical: the incoming bytes the reads would overwrite are kept aside first.
+  p.keep_incoming =
+      p.reads != 0 && p.writes != 0 && read_first < write_end && write_first < read_end;
+  p.write_first = write_first;
+  p.write_end = write_end;
+}
+
+int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data,
+                             uint16_t len, uint16_t fmmus) {
+  const WholePlan& p = whole_plan_;
+  if (!p.valid || p.address != address || p.len != len || p.fmmus != fmmus || p.usable != usable) {
+    plan_whole_fmmus(usable, address, len, fmmus);
+  }
+  if (!p.whole) return -1;
+  if ((p.reads | p.writes) == 0) return 0;
+  const uint8_t* incoming = data;
+  if (p.keep_incoming) {
+    std::memcpy(scratch_.data() + p.write_first, data + p.write_first, p.write_end - p.write_first);
+    incoming = scratch_.data();
+  }
+  bool read_done = false;
+  bool write_done = false;
+  for (uint16_t m = p.reads; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+    const int index = std::countr_zero(m);
+    read_done |= whole_fmmu_read(index, data + (fmmu_[index].logical_start - address));
+  }
+  for (uint16_t m = p.writes; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+    const int index = std::countr_zero(m);
+    write_done |= whole_fmmu_write(index, incoming + (fmmu_[index].logical_start - address));
+  }
+  if (cmd == Command::Lrw) return (read_done ? 1 : 0) + (write_done ? 2 : 0);
+  return (read_done || write_done) ? 1 : 0;
+}
+
+bool Esc::whole_fmmu_read(int index, uint8_t* dst) {
+  const uint16_t meeting = fmmu_meeting_[index];
+  if (meeting != 0) return sm_master_read_buffer(std::countr_zero(meeting), dst);
+  const FmmuState& f = fmmu_[index];
+  copy_bytes(dst, &mem_[f.physical_start], f.length);
+  return true;
+}
+
+bool Esc::whole_fmmu_write(int index, const uint8_t* src) {
+  if (write_protection_active() && !write_allowed(reg::kProcessRam)) return false;  // ESC-wide
+  const uint16_t meeting = fmmu_meeting_[index];
+  if (meeting != 0) return sm_master_write_buffer(std::countr_zero(meeting), src);
+  const FmmuState& f = fmmu_[index];
+  copy_bytes(&mem_[f.physical_start], src, f.length);
+  return true;
 }
 
 bool Esc::fmmu_read(const FmmuSpan& s, uint64_t dg_lo, uint8_t* data) {

@@ -8,6 +8,7 @@
 
 #include "base/little_endian.hpp"
 #include "ecat/esc/esc.hpp"
+#include "ecat/esc/short_copy.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -177,6 +178,11 @@ void Esc::sm_after_write(uint16_t meeting, uint16_t address, uint16_t len) {
 }
 
 void Esc::sm_buffer_access(int n, uint32_t address, uint32_t end, bool filler) {
+  const SmState& s = sm_[n];
+  sm_hand_over(n, address <= s.start, end >= static_cast<uint32_t>(s.start) + s.length, filler);
+}
+
+inline void Esc::sm_hand_over(int n, bool first, bool last, bool filler) {
   // Status 0x0805+8n (ETG.1000.4 §6.7; ESC datasheet 0x0805): bit 0 "written" is set when the
   // filler completes the buffer and cleared when the drainer reads its first byte; bit 1
   // "read" is set when the drainer completes it and cleared when the filler writes its first
@@ -186,8 +192,6 @@ void Esc::sm_buffer_access(int n, uint32_t address, uint32_t end, bool filler) {
   // mailbox empties it; of a buffered SM releases the buffer, so the next read opens the
   // newest one.
   SmState& s = sm_[n];
-  const bool first = address <= s.start;
-  const bool last = end >= static_cast<uint32_t>(s.start) + s.length;
   const uint8_t open = filler ? sm::kStatusWriteOpen : sm::kStatusReadOpen;
   uint8_t status = sm_status(n);
   if (first)
@@ -217,6 +221,30 @@ void Esc::update_sm_events(int n) {
   uint8_t* const memory = mem_.data();
   write_sm_events(memory, n, sm_[n].control, sm_[n].enabled,
                   memory[sm::base(n) + reg::kSmStatusOffset]);
+}
+
+bool Esc::sm_master_read_buffer(int n, uint8_t* dst) {
+  // sm_allows_read: an SM the PDI deactivated, or an empty mailbox, gives no data.
+  const SmState& s = sm_[n];
+  if (!s.active || (sm::is_mailbox(s.control) && !sm::ecat_writes(s.control) &&
+                    (sm_status(n) & sm::kStatusFull) == 0)) {
+    return false;
+  }
+  copy_bytes(dst, &mem_[s.start], s.length);
+  if (!sm::ecat_writes(s.control)) sm_hand_over(n, true, true, false);
+  return true;
+}
+
+bool Esc::sm_master_write_buffer(int n, const uint8_t* src) {
+  const SmState& s = sm_[n];
+  if (!sm::ecat_writes(s.control) || !sm_takes_write(n)) return false;  // sm_allows_write
+  copy_bytes(&mem_[s.start], src, s.length);
+  sm_hand_over(n, true, true, true);
+  // sm_after_write: a completed buffer retriggers the process-data watchdog.
+  if (!sm::is_mailbox(s.control) && (s.control & sm::kControlWatchdog)) {
+    watchdog_trigger(pass_.port0_ns);
+  }
+  return true;
 }
 
 }  // namespace rackcat::ecat
