@@ -108,15 +108,6 @@ void Esc::set_port1_link(bool link) {
   }
 }
 
-bool Esc::forwards_to_port1() const {
-  // DL control 0x0101 bits 3:2 = loop control of port 1: 00 auto, 01 auto-close, 10 open,
-  // 11 closed. Auto modes open the port when a link is present.
-  const uint8_t loop = (mem_[reg::kDlControl + 1] >> 2) & 0x03;
-  if (loop == 0x03) return false;
-  if (loop == 0x02) return true;
-  return port1_link_;
-}
-
 bool Esc::addressed_by_station(uint16_t adp) const {
   if (adp == le::get16(&mem_[reg::kStationAddress])) return true;
   // DL control bit 24 (0x0103 bit 0) lets the configured station alias address us too.
@@ -129,9 +120,9 @@ void Esc::process_datagram(uint8_t* datagram, uint16_t data_len) {
   const uint16_t adp = le::get16(datagram + 2);
   const uint16_t ado = le::get16(datagram + 4);
   uint8_t wkc = 0;
+  bool physical = true;
+  bool addressed = false;
   switch (static_cast<Command>(command)) {
-    case Command::Nop:
-      break;
     case Command::Aprd:
     case Command::Apwr:
     case Command::Aprw:
@@ -139,27 +130,37 @@ void Esc::process_datagram(uint8_t* datagram, uint16_t data_len) {
       // Position addressing: the slave that sees ADP 0 is addressed; every slave increments
       // ADP on the way (ETG.1000.4 §5.3.2).
       le::put16(datagram + 2, static_cast<uint16_t>(adp + 1));
-      wkc = process_physical(command, ado, data, data_len, adp == 0);
+      addressed = adp == 0;
       break;
     case Command::Fprd:
     case Command::Fpwr:
     case Command::Fprw:
     case Command::Frmw:
-      wkc = process_physical(command, ado, data, data_len, addressed_by_station(adp));
+      addressed = addressed_by_station(adp);
       break;
     case Command::Brd:
     case Command::Bwr:
     case Command::Brw:
       le::put16(datagram + 2, static_cast<uint16_t>(adp + 1));
-      wkc = process_physical(command, ado, data, data_len, true);
+      addressed = true;
       break;
     case Command::Lrd:
     case Command::Lwr:
     case Command::Lrw:
       wkc = process_logical(command, le::get32(datagram + 2), data, data_len, fmmu_active_mask_);
+      physical = false;
       break;
     default:
-      break;  // reserved command: the ESC forwards the datagram untouched
+      physical = false;  // NOP, reserved commands: the ESC forwards the datagram untouched
+      break;
+  }
+  const auto cmd = static_cast<Command>(command);
+  // Read-multiple-write: the addressed slave reads, every other slave writes (§5.4.3); the
+  // other commands only act where they address.
+  if (physical && (addressed || cmd == Command::Armw || cmd == Command::Frmw)) {
+    wkc = is_system_time_access(ado, data_len)
+              ? system_time_datagram(cmd, data, data_len, addressed)
+              : process_physical(command, ado, data, data_len, addressed);
   }
   if (wkc != 0) {
     uint8_t* counter = data + data_len;
@@ -183,11 +184,8 @@ void Esc::or_irq(uint8_t* datagram) const {
 uint8_t Esc::process_physical(uint8_t command, uint16_t address, uint8_t* data, uint16_t len,
                               bool addressed) {
   const auto cmd = static_cast<Command>(command);
-  const bool rmw = cmd == Command::Armw || cmd == Command::Frmw;
-  if (!addressed && !rmw) return 0;
   // An access crossing the end of the 64 KiB address space is ignored (no WKC).
   if (static_cast<uint32_t>(address) + len > reg::kAddressSpace) return 0;
-  if (is_system_time_access(address, len)) return system_time_datagram(cmd, data, len, addressed);
   switch (cmd) {
     case Command::Aprd:
     case Command::Fprd:

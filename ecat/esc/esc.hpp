@@ -163,7 +163,14 @@ class Esc {
   void set_port1_link(bool link);
   // Whether frames leave through port 1 to the next slave: link present and the loop not
   // closed by DL control 0x0101 (ETG.1000.4 §6.3.1: 11b = closed, 01b = auto-close).
-  bool forwards_to_port1() const;
+  bool forwards_to_port1() const {
+    // DL control 0x0101 bits 3:2 = loop control of port 1: 00 auto, 01 auto-close, 10 open,
+    // 11 closed. Auto modes open the port when a link is present.
+    const uint8_t loop = (mem_[reg::kDlControl + 1] >> 2) & 0x03;
+    if (loop == 0x03) return false;
+    if (loop == 0x02) return true;
+    return port1_link_;
+  }
 
   // ---- observers (tests, CLI, the link) -------------------------------------------------------
   // AL status 0x0130 as the firmware last wrote it (state bits 3..0, error flag bit 4).
@@ -191,6 +198,10 @@ class Esc {
     bool enabled = false;     // ECAT activate bit (0x0806 bit 0) and a non-zero length
     bool active = false;      // enabled and not deactivated by the PDI (0x0807 bit 0)
     uint8_t next_buffer = 0;  // buffered mode: buffer index that receives the next write
+    // Status bits that make its ECAT event (0x0210) and AL event (0x0220) pending; 0 when
+    // that event is off (sync_manager.cpp, from control and enabled).
+    uint8_t ecat_event_status = 0;
+    uint8_t al_event_status = 0;
   };
   struct FmmuState {
     uint32_t logical_start = 0;
@@ -213,6 +224,8 @@ class Esc {
   bool addressed_by_station(uint16_t adp) const;
   bool physical_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge_or);
   bool physical_write(uint16_t address, const uint8_t* src, uint16_t len);
+  // A physical datagram where it acts (where it addresses; ARMW/FRMW everywhere) through the
+  // register and SyncManager rules; returns its working counter.
   uint8_t process_physical(uint8_t command, uint16_t address, uint8_t* data, uint16_t len,
                            bool addressed);
   // register_map.cpp: write masks and side effects of register accesses.
@@ -232,6 +245,9 @@ class Esc {
   // fmmu.cpp: logical addressing.
   uint8_t process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len,
                           uint16_t fmmus);
+  // The bit-wise walk process_logical takes when process_whole_fmmus does not apply.
+  uint8_t walk_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data, uint16_t len,
+                     uint16_t fmmus);
   void or_irq(uint8_t* datagram) const;
   // One FMMU intersected with one logical datagram, computed once per datagram: logical bits
   // lo..hi inside both, the bit shift onto physical memory and the physical bytes touched.

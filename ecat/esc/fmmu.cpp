@@ -156,6 +156,11 @@ uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, u
     const int wkc = process_whole_fmmus(cmd, usable, address, data, len, fmmus);
     if (wkc >= 0) return static_cast<uint8_t>(wkc);
   }
+  return walk_fmmus(cmd, usable, address, data, len, fmmus);
+}
+
+uint8_t Esc::walk_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data, uint16_t len,
+                        uint16_t fmmus) {
   const uint64_t dg_lo = static_cast<uint64_t>(address) * 8;
   const uint64_t dg_hi = (static_cast<uint64_t>(address) + len) * 8 - 1;
 

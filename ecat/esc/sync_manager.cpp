@@ -24,22 +24,26 @@ void set_event_bit(uint8_t* memory, uint32_t address, int bit, bool pending) {
   byte = static_cast<uint8_t>(pending ? (byte | mask) : (byte & ~mask));
 }
 
-// The events of an enabled SyncManager n with `control` and `status` (ETG.1000.4 §6.7; ESC
-// datasheet 0x0210, 0x0220): ECAT event request bits 4-11 mirror SMs 0-7 whose ECAT event is
-// enabled (control bit 4): a buffer the master reads that the PDI has filled, one it writes
-// that the PDI has emptied. AL event request bits 8-23 mirror SMs 0-15 whose AL event is
-// enabled (control bit 5): a buffer the master has written, or read, pending for the PDI until
-// the PDI accesses its first byte.
-void write_sm_events(uint8_t* memory, int n, uint8_t control, bool enabled, uint8_t status) {
-  const bool ecat_writes = sm::ecat_writes(control);
-  const uint8_t for_master = ecat_writes ? sm::kStatusRead : sm::kStatusWritten;
-  const uint8_t for_pdi = ecat_writes ? sm::kStatusWritten : sm::kStatusRead;
-  if (n < 8) {
-    set_event_bit(memory, reg::kEcatEventRequest, 4 + n,
-                  enabled && (control & 0x10) != 0 && (status & for_master) != 0);
-  }
-  set_event_bit(memory, reg::kAlEventRequest, 8 + n,
-                enabled && (control & sm::kControlAlEvent) != 0 && (status & for_pdi) != 0);
+// The status bits that make SyncManager n's events pending (ETG.1000.4 §6.7; ESC datasheet
+// 0x0210, 0x0220), 0 when the event is off: ECAT event request bits 4-11 mirror SMs 0-7 whose
+// ECAT event is enabled (control bit 4): a buffer the master reads that the PDI has filled, one
+// it writes that the PDI has emptied. AL event request bits 8-23 mirror SMs 0-15 whose AL
+// event is enabled (control bit 5): a buffer the master has written, or read, pending for the
+// PDI until the PDI accesses its first byte. A disabled SM raises neither.
+uint8_t ecat_event_status(uint8_t control, bool enabled) {
+  if (!enabled || (control & 0x10) == 0) return 0;
+  return sm::ecat_writes(control) ? sm::kStatusRead : sm::kStatusWritten;
+}
+uint8_t al_event_status(uint8_t control, bool enabled) {
+  if (!enabled || (control & sm::kControlAlEvent) == 0) return 0;
+  return sm::ecat_writes(control) ? sm::kStatusWritten : sm::kStatusRead;
+}
+
+// Sets SM n's two event bits from its `status`.
+void write_sm_events(uint8_t* memory, int n, uint8_t ecat_status, uint8_t al_status,
+                     uint8_t status) {
+  if (n < 8) set_event_bit(memory, reg::kEcatEventRequest, 4 + n, (status & ecat_status) != 0);
+  set_event_bit(memory, reg::kAlEventRequest, 8 + n, (status & al_status) != 0);
 }
 
 }  // namespace
@@ -59,6 +63,8 @@ void Esc::reload_sm(int n) {
   s.enabled = (activate & 0x01) && s.length != 0 &&
               static_cast<uint32_t>(s.start) + s.length <= reg::kAddressSpace;
   s.active = s.enabled && (mem_[base + reg::kSmPdiControlOffset] & 0x01) == 0;
+  s.ecat_event_status = ecat_event_status(s.control, s.enabled);
+  s.al_event_status = al_event_status(s.control, s.enabled);
   activate_seen_[n] = activate;
   if (s.enabled) {
     sm_enabled_mask_ |= static_cast<uint16_t>(1u << n);
@@ -214,12 +220,12 @@ inline void Esc::sm_hand_over(int n, bool first, bool last, bool filler) {
   }
   uint8_t* const memory = mem_.data();
   memory[sm::base(n) + reg::kSmStatusOffset] = status;
-  write_sm_events(memory, n, s.control, s.enabled, status);
+  write_sm_events(memory, n, s.ecat_event_status, s.al_event_status, status);
 }
 
 void Esc::update_sm_events(int n) {
   uint8_t* const memory = mem_.data();
-  write_sm_events(memory, n, sm_[n].control, sm_[n].enabled,
+  write_sm_events(memory, n, sm_[n].ecat_event_status, sm_[n].al_event_status,
                   memory[sm::base(n) + reg::kSmStatusOffset]);
 }
 
