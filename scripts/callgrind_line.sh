@@ -11,6 +11,8 @@
 # master repeating them, as op_bench's replay); DC=1 adds the FRMW 0x0910 to the frame.
 # CACHE=1 also simulates the caches and prints the L1 data misses (reads + writes) per slave
 # and frame: at 199 slaves the round is bound by the cache lines each slave touches.
+# MIN_TIME (default 0.1 s of benchmark time): fewer frames let the first one, which still
+# changes the outputs, weigh in the "repeated" figures.
 set -euo pipefail
 if [ $# -lt 2 ]; then
   echo "usage: $0 BENCH_RACK_LINE SLAVES..." >&2
@@ -30,7 +32,7 @@ for n in "$@"; do
     show=Ir,D1mr,D1mw
   fi
   valgrind --tool=callgrind "${cache[@]}" --callgrind-out-file="$out/cg.$n" "$bench" \
-    --benchmark_filter="^$benchmark/$n/$dc\$" --benchmark_min_time=0.02 >/dev/null 2>&1
+    --benchmark_filter="^$benchmark/$n/$dc\$" --benchmark_min_time="${MIN_TIME:-0.1}" >/dev/null 2>&1
   # The callers' lines above rack_line_cycle's own line carry its inclusive cost and call count.
   callgrind_annotate --show="$show" --inclusive=yes --threshold=100 --tree=caller "$out/cg.$n" |
     awk -v n="$n" '
