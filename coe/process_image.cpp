@@ -3,36 +3,20 @@
 #include <algorithm>
 #include <cstring>
 
+#include "base/short_copy.hpp"
 #include "coe/bits.hpp"
 
 namespace rackcat::coe {
 namespace {
 
 // A copy between the process data and an object image. Whole bytes of at most 8 (every
-// mapped entry of a digital card, most records) are moved with fixed-size loads and stores
-// (two overlapping ones for 3, 5, 6, 7 bytes) instead of a libc call: the cyclic path does a
-// few of these per slave and frame (issue 16). Everything else: copy_bits.
+// mapped entry of a digital card, most records) go through base::copy_bytes's fixed-size
+// moves instead of a libc call: the cyclic path does a few of these per slave and frame
+// (issue 16). Everything else: copy_bits.
 inline void copy_entry(uint8_t* dst, size_t dst_bit, const uint8_t* src, size_t src_bit,
                        size_t nbits) {
   if (((dst_bit | src_bit | nbits) % 8) == 0 && nbits != 0 && nbits <= 64) {
-    uint8_t* d = dst + dst_bit / 8;
-    const uint8_t* s = src + src_bit / 8;
-    const size_t n = nbits / 8;
-    if (n >= 4) {
-      uint32_t a = 0, b = 0;
-      std::memcpy(&a, s, 4);
-      std::memcpy(&b, s + n - 4, 4);
-      std::memcpy(d, &a, 4);
-      std::memcpy(d + n - 4, &b, 4);
-    } else if (n >= 2) {
-      uint16_t a = 0, b = 0;
-      std::memcpy(&a, s, 2);
-      std::memcpy(&b, s + n - 2, 2);
-      std::memcpy(d, &a, 2);
-      std::memcpy(d + n - 2, &b, 2);
-    } else {
-      d[0] = s[0];
-    }
+    base::copy_bytes(dst + dst_bit / 8, src + src_bit / 8, nbits / 8);
     return;
   }
   copy_bits(dst, dst_bit, src, src_bit, nbits);

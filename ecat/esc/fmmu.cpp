@@ -6,8 +6,8 @@
 #include <cstring>
 
 #include "base/little_endian.hpp"
+#include "base/short_copy.hpp"
 #include "ecat/esc/esc.hpp"
-#include "ecat/esc/short_copy.hpp"
 #include "ecat/frame.hpp"
 #include "ecat/registers.hpp"
 
@@ -30,7 +30,7 @@ inline uint8_t byte_mask(uint64_t byte, uint64_t lo, uint64_t hi) {
 inline void merge_bits(uint8_t* to, const uint8_t* from, uint64_t lo, uint64_t hi) {
   const uint64_t bytes = hi / 8 - lo / 8 + 1;
   if (lo % 8 == 0 && hi % 8 == 7) {  // whole bytes: the usual process-data mapping
-    copy_bytes(to, from, bytes);
+    base::copy_bytes(to, from, bytes);
     return;
   }
   const auto first = static_cast<uint8_t>(0xFF << (lo % 8));
@@ -43,7 +43,7 @@ inline void merge_bits(uint8_t* to, const uint8_t* from, uint64_t lo, uint64_t h
     return;
   }
   merge(0, first);
-  copy_bytes(to + 1, from + 1, bytes - 2);
+  base::copy_bytes(to + 1, from + 1, bytes - 2);
   merge(bytes - 1, last);
 }
 
@@ -292,7 +292,7 @@ bool Esc::whole_fmmu_read(int index, uint8_t* dst) {
   const uint16_t meeting = fmmu_meeting_[index];
   if (meeting != 0) return sm_master_read_buffer(std::countr_zero(meeting), dst);
   const FmmuState& f = fmmu_[index];
-  copy_bytes(dst, &mem_[f.physical_start], f.length);
+  base::copy_bytes(dst, &mem_[f.physical_start], f.length);
   return true;
 }
 
@@ -301,7 +301,7 @@ bool Esc::whole_fmmu_write(int index, const uint8_t* src) {
   const uint16_t meeting = fmmu_meeting_[index];
   if (meeting != 0) return sm_master_write_buffer(std::countr_zero(meeting), src);
   const FmmuState& f = fmmu_[index];
-  copy_bytes(&mem_[f.physical_start], src, f.length);
+  base::copy_bytes(&mem_[f.physical_start], src, f.length);
   return true;
 }
 

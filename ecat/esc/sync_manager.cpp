@@ -7,8 +7,8 @@
 #include <algorithm>
 
 #include "base/little_endian.hpp"
+#include "base/short_copy.hpp"
 #include "ecat/esc/esc.hpp"
-#include "ecat/esc/short_copy.hpp"
 #include "ecat/registers.hpp"
 
 namespace rackcat::ecat {
@@ -236,7 +236,7 @@ bool Esc::sm_master_read_buffer(int n, uint8_t* dst) {
                     (sm_status(n) & sm::kStatusFull) == 0)) {
     return false;
   }
-  copy_bytes(dst, &mem_[s.start], s.length);
+  base::copy_bytes(dst, &mem_[s.start], s.length);
   if (!sm::ecat_writes(s.control)) sm_hand_over(n, true, true, false);
   return true;
 }
@@ -244,7 +244,7 @@ bool Esc::sm_master_read_buffer(int n, uint8_t* dst) {
 bool Esc::sm_master_write_buffer(int n, const uint8_t* src) {
   const SmState& s = sm_[n];
   if (!sm::ecat_writes(s.control) || !sm_takes_write(n)) return false;  // sm_allows_write
-  copy_bytes(&mem_[s.start], src, s.length);
+  base::copy_bytes(&mem_[s.start], src, s.length);
   sm_hand_over(n, true, true, true);
   // sm_after_write: a completed buffer retriggers the process-data watchdog.
   if (!sm::is_mailbox(s.control) && (s.control & sm::kControlWatchdog)) {

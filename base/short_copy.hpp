@@ -1,0 +1,41 @@
+// Copies of the few bytes a cyclic path moves (a slave's SyncManager buffer, one mapped PDO
+// entry) without a library call: two fixed-size, possibly overlapping moves of the widest
+// power of two not above the length; longer runs go to memcpy (issue 16).
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+
+namespace rackcat::base {
+
+namespace detail {
+
+// n bytes, width <= n <= 2 x width: the first and the last `width` bytes (they overlap when
+// n < 2 x width), both loaded before either is stored.
+template <typename Word>
+inline void copy_overlapping(uint8_t* to, const uint8_t* from, uint64_t n) {
+  Word a = 0;
+  Word b = 0;
+  std::memcpy(&a, from, sizeof(Word));
+  std::memcpy(&b, from + n - sizeof(Word), sizeof(Word));
+  std::memcpy(to, &a, sizeof(Word));
+  std::memcpy(to + n - sizeof(Word), &b, sizeof(Word));
+}
+
+}  // namespace detail
+
+inline void copy_bytes(uint8_t* to, const uint8_t* from, uint64_t n) {
+  if (n >= 8 && n <= 16) {
+    detail::copy_overlapping<uint64_t>(to, from, n);
+  } else if (n >= 4 && n < 8) {
+    detail::copy_overlapping<uint32_t>(to, from, n);
+  } else if (n >= 2 && n < 4) {
+    detail::copy_overlapping<uint16_t>(to, from, n);
+  } else if (n == 1) {
+    *to = *from;
+  } else if (n > 16) {
+    std::memcpy(to, from, n);
+  }
+}
+
+}  // namespace rackcat::base
