@@ -57,10 +57,15 @@ class ProcessImage {
   };
   AbortCode compile_direction(PdoDirection dir, Direction& out);
 
+  // In the order write_outputs() then read_inputs() read them (issue 16: the cyclic path of a
+  // line of devices is bound by the cache lines it touches).
+  std::vector<Copy> outputs_;
+  std::vector<Object*> output_hooks_;
+  std::vector<Object*> input_hooks_;
+  size_t input_bits_ = 0;
+  std::vector<Copy> inputs_;
+  size_t output_bits_ = 0;
   ObjectDictionary& od_;
-  std::vector<Copy> outputs_, inputs_;
-  std::vector<Object*> output_hooks_, input_hooks_;
-  size_t output_bits_ = 0, input_bits_ = 0;
 };
 
 }  // namespace rackcat::coe

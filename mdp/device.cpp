@@ -81,8 +81,9 @@ struct Device::Impl final : DeviceRuntime {
   }
   // --- What write_outputs/read_inputs touch, side by side (issue 16: the cyclic path of a
   // line of devices is bound by cache misses, not instructions).
+  // The listeners of the cyclic callbacks (ListenerScope::All), a subset of `listeners`.
+  std::vector<CycleListener*> cycle_listeners;
   std::optional<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
-  std::vector<CycleListener*> listeners;
   // 0xF6F0/0xF6F2 (input latch times): their entries' slots, found once when the dictionary is
   // built, so the cyclic path does no dictionary or entry lookup.
   std::vector<coe::EntrySlot> latch_local_slots, latch_esc_slots;
@@ -116,10 +117,15 @@ struct Device::Impl final : DeviceRuntime {
   bool reset_factory = false;  // the 0xFBF0 command the worker executes is a factory reset
   std::chrono::steady_clock::time_point last_sync_at{};
   coe::diag::History history{kDiagnosisMessages};
-  std::vector<uint8_t> enumerated;  // per module: enumerated now (module_enumeration.hpp)
+  std::vector<uint8_t> enumerated;        // per module: enumerated now (module_enumeration.hpp)
+  std::vector<CycleListener*> listeners;  // every listener, in the order they were added
   template <class F>
   void notify(F&& f) {
     for (CycleListener* l : listeners) f(*l);
+  }
+  template <class F>
+  void notify_cycle(F&& f) {
+    for (CycleListener* l : cycle_listeners) f(*l);
   }
 
   // The firmware round's time (base/round_time.hpp): one clock read per round, not per slave.
@@ -483,6 +489,7 @@ Device::Device(RackConfig config, DeviceOptions options) : impl_(std::make_uniqu
   d.self = this;
   d.config = std::move(config);
   d.listeners.reserve(16);
+  d.cycle_listeners.reserve(16);
   d.dir = options.state ? std::move(options.state)
                         : StateDirectory::open(options.state_dir.empty() ? default_state_dir()
                                                                          : options.state_dir);
@@ -663,12 +670,12 @@ uint16_t Device::input_bytes() const {
 void Device::write_outputs(std::span<const uint8_t> sm2) {
   Impl& d = *impl_;
   d.image->write_outputs(sm2);
-  d.notify([&](CycleListener& l) { l.on_outputs(*this); });
+  d.notify_cycle([&](CycleListener& l) { l.on_outputs(*this); });
 }
 
 void Device::read_inputs(std::span<uint8_t> sm3) {
   Impl& d = *impl_;
-  d.notify([&](CycleListener& l) { l.before_inputs(*this); });
+  d.notify_cycle([&](CycleListener& l) { l.before_inputs(*this); });
   // 0xF6F0/0xF6F2: the input latch time of every module is this update.
   if (!d.latch_local_slots.empty()) Impl::set_array(d.latch_local_slots, d.uptime_us());
   if (d.latch_esc_stale || d.latch_esc_value != d.last_sync_ns) {
@@ -685,7 +692,7 @@ void Device::sync_event(int which, uint64_t system_time_ns) {
     d.last_sync_ns = system_time_ns;
     d.last_sync_at = std::chrono::steady_clock::now();
   }
-  d.notify([&](CycleListener& l) { l.on_sync(*this, which, system_time_ns); });
+  d.notify_cycle([&](CycleListener& l) { l.on_sync(*this, which, system_time_ns); });
 }
 
 void Device::watchdog_expired() {
@@ -696,14 +703,17 @@ SyncStatistics& Device::sync_statistics(bool outputs) {
   return impl_->sync_statistics(outputs);
 }
 
-void Device::add_listener(CycleListener* listener) {
+void Device::add_listener(CycleListener* listener, ListenerScope scope) {
   auto& v = impl_->listeners;
-  if (std::find(v.begin(), v.end(), listener) == v.end()) v.push_back(listener);
+  if (std::find(v.begin(), v.end(), listener) != v.end()) return;
+  v.push_back(listener);
+  if (scope == ListenerScope::All) impl_->cycle_listeners.push_back(listener);
 }
 
 void Device::remove_listener(CycleListener* listener) {
-  auto& v = impl_->listeners;
-  v.erase(std::remove(v.begin(), v.end(), listener), v.end());
+  for (auto* v : {&impl_->listeners, &impl_->cycle_listeners}) {
+    v->erase(std::remove(v->begin(), v->end(), listener), v->end());
+  }
 }
 
 const std::string& Device::state_dir() const {

@@ -164,7 +164,11 @@ class Device {
   void watchdog_expired();
   SyncStatistics& sync_statistics(bool outputs);  // 0x1C32 (true) / 0x1C33 (false)
 
-  void add_listener(CycleListener* listener);
+  // What a listener hears: every callback, or all but the cyclic ones (on_outputs,
+  // before_inputs, on_sync), which then do not visit it at all (issue 16: in a line of devices
+  // every listener the cyclic path calls costs each device a cache line per frame).
+  enum class ListenerScope : uint8_t { All, EventsOnly };
+  void add_listener(CycleListener* listener, ListenerScope scope = ListenerScope::All);
   void remove_listener(CycleListener* listener);
 
   // --- Stored parameters (0xFBF2 store, 0xFBF4 load, 0xFBF0 factory reset).

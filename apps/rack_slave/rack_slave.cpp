@@ -22,9 +22,9 @@ RackSlave::RackSlave(mdp::RackConfig config, const std::shared_ptr<mdp::StateDir
                      int position) {
   mdp::DeviceOptions options;
   options.state = position == 0 ? state_dir : state_dir->child("slave-" + std::to_string(position));
-  device_ = std::make_unique<mdp::Device>(for_position(std::move(config), position), options);
+  device_.emplace(for_position(std::move(config), position), options);
   rack_ = std::make_unique<modules::Rack>(*device_);
-  device_->add_listener(&reset_listener_);
+  device_->add_listener(&reset_listener_, mdp::Device::ListenerScope::EventsOnly);
   sii_ = esi::build_sii(*device_).bytes;
 }
 

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -58,7 +59,11 @@ class RackSlave final : public ecat::Application {
   void on_watchdog_expired() override;
 
  private:
-  std::unique_ptr<mdp::Device> device_;
+  // Every frame reads these two (mailbox_pending, then the process data): in the object's
+  // first line, the device's handle held in place rather than behind one more pointer (issue
+  // 16: a line of slaves is bound by the cache lines each one touches per frame).
+  std::optional<mdp::Device> device_;
+  bool restart_pending_ = false;
   std::unique_ptr<modules::Rack> rack_;  // the slot cards; a CycleListener of device_
   std::vector<uint8_t> sii_;
 
@@ -81,7 +86,6 @@ class RackSlave final : public ecat::Application {
   };
   FoeMailbox foe_mailbox_{*this};
   std::function<void()> restart_;
-  bool restart_pending_ = false;
   bool sii_stale_ = false;  // 0xFBF0 ran; finish_device_reset() rebuilds the SII image
 
   // Hears the device reset command (0xFBF0) among the device's listeners.

@@ -68,18 +68,19 @@ Rack::Rack(mdp::Device& device, RackOptions options)
   }
   const auto modules = device_.modules();
   drivers_.resize(modules.size());
+  cycle_.resize(modules.size());
   module_rim_.resize(modules.size());
   last_safe_.assign(modules.size(), 0);
   last_unsafe_.assign(modules.size(), 0);
   for (const mdp::Module& m : modules) {
     drivers_[m.number - 1] = make_driver(m, od);
+    cycle_[m.number - 1] = {drivers_[m.number - 1].get(), rims_[m.rim].state == RimState::Online};
     module_rim_[m.number - 1] = m.rim;
     rims_[m.rim].modules.push_back(m.number);
     if (auto* u = dynamic_cast<UartDriver*>(drivers_[m.number - 1].get())) uarts_.push_back(u);
     if (auto* e = dynamic_cast<EncoderDriver*>(drivers_[m.number - 1].get())) e->attach(device_);
     if (drivers_[m.number - 1]->detects_wiring_faults()) fault_drivers_.push_back(m.number - 1);
   }
-  for (const auto& [rr, rim] : rims_) rim_online_[rr] = rim.state == RimState::Online;
   channel_diag_ = std::make_unique<ChannelDiagnostics>(device_, drivers_);
 
   // A replay file is read below the rack file's own directory (mdp::FileRoot: no "..", no
@@ -187,10 +188,6 @@ CardDriver* Rack::driver_at(uint8_t rim, uint8_t slot) {
   return m ? driver(m->number) : nullptr;
 }
 
-bool Rack::rim_online(uint8_t rim) const {
-  return rim_online_[rim];
-}
-
 void Rack::start_uart_ptys() {
   for (UartDriver* u : uarts_) {
     u->start_ptys();
@@ -207,8 +204,8 @@ void Rack::on_outputs(mdp::Device&) {
   // Outputs are driven only in OP; the first OP data after start (or after leaving OP) is the
   // first valid output data (power-on rule).
   if (state_ != EsmState::Op) return;
-  for (size_t i = 0; i < drivers_.size(); ++i) {
-    if (rim_online(module_rim_[i])) drivers_[i]->read_outputs();
+  for (const CycleCard& c : cycle_) {
+    if (c.rim_online) c.driver->read_outputs();
   }
   outputs_valid_ = true;
 }
@@ -229,9 +226,9 @@ void Rack::before_inputs(mdp::Device&) {
       }
     }
   }
-  for (size_t i = 0; i < drivers_.size(); ++i) update_inputs(i, t - t0_, dt);
+  for (size_t i = 0; i < cycle_.size(); ++i) update_inputs(i, t - t0_, dt);
   evaluate_faults();
-  channel_diag_->evaluate([this](size_t i) { return rim_online(module_rim_[i]); });
+  channel_diag_->evaluate([this](size_t i) { return module_online(i); });
   if (t >= cpu_next_publish_) publish_cpu_temperature();
   if (dirty_) {
     tree_.update();
@@ -291,7 +288,7 @@ void Rack::on_state_changed(mdp::Device&, EsmState from, EsmState to) {
 
 void Rack::apply_safe_states() {
   for (size_t i = 0; i < drivers_.size(); ++i) {
-    if (rim_online(module_rim_[i])) drivers_[i]->apply_safe_state();
+    if (module_online(i)) drivers_[i]->apply_safe_state();
   }
   dirty_ = true;
 }
@@ -321,7 +318,7 @@ void Rack::enumerate(mdp::Device& device) {
   const auto modules = device.modules();
   std::vector<uint8_t> present(modules.size(), 1);
   if (!detect_modules_override()) {
-    for (size_t i = 0; i < modules.size(); ++i) present[i] = rim_online(modules[i].rim) ? 1 : 0;
+    for (size_t i = 0; i < modules.size(); ++i) present[i] = module_online(i) ? 1 : 0;
   }
   device.enumerate_modules(present);
 }
@@ -400,7 +397,6 @@ void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
   RimStatus& rim = it->second;
   const RimState prev = rim.state;
   rim.state = state;
-  rim_online_[rr] = state == RimState::Online;
   if (prev != state) {
     base::log_event({.kind = base::EventKind::RimState,
                      .a = rr,
@@ -412,6 +408,7 @@ void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
   rim.fault_error = false;
   tree_.set_rim_state(rr, state, comm_error);
   for (uint16_t n : rim.modules) {
+    cycle_[n - 1].rim_online = state == RimState::Online;
     CardDriver& d = *drivers_[n - 1];
     if (state != RimState::Online) {
       // The RIM drives its outputs to the TÜV-safe level; its inputs are gone.
@@ -681,15 +678,16 @@ SourceContext Rack::source_context() {
 
 void Rack::sample_inputs(uint16_t module) {
   CardDriver* d = driver(module);
-  if (d != nullptr && rim_online(module_rim_[module - 1])) {
+  if (d != nullptr && module_online(module - 1u)) {
     d->write_inputs(now() - t0_, options_.cycle_time_s);
     d->substitute_inputs(false);
   }
 }
 
 void Rack::update_inputs(size_t i, double t, double dt) {
-  CardDriver& d = *drivers_[i];
-  if (rim_online(module_rim_[i])) {
+  const CycleCard& c = cycle_[i];
+  CardDriver& d = *c.driver;
+  if (c.rim_online) {
     d.write_inputs(t, dt);
     d.substitute_inputs(false);
   } else {
@@ -704,11 +702,11 @@ void Rack::refresh() {
   if (state_ != EsmState::SafeOp && state_ != EsmState::Op) {
     // No process data runs: sample the inputs here so SDO reads and `ctl list` are live.
     const double t = now();
-    for (size_t i = 0; i < drivers_.size(); ++i) update_inputs(i, t - t0_, options_.cycle_time_s);
+    for (size_t i = 0; i < cycle_.size(); ++i) update_inputs(i, t - t0_, options_.cycle_time_s);
   }
   publish_fans();
   evaluate_faults();
-  channel_diag_->evaluate([this](size_t i) { return rim_online(module_rim_[i]); });
+  channel_diag_->evaluate([this](size_t i) { return module_online(i); });
   tree_.update();
   dirty_ = false;
 }

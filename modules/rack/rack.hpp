@@ -169,29 +169,36 @@ class Rack : public mdp::CycleListener {
   void publish_fans();
   void publish_cpu_temperature();
   void evaluate_faults();
-  bool rim_online(uint8_t rim) const;
+  // Whether module i's RIM is online (its sources present, its outputs driven).
+  bool module_online(size_t i) const { return cycle_[i].rim_online; }
 
-  mdp::Device& device_;
-  RackOptions options_;
-  // What on_outputs/before_inputs read every cycle, side by side (issue 16: a line of racks is
-  // bound by the cache lines each slave's round touches, not by instructions).
+  // What on_outputs/before_inputs read every cycle, side by side and first (issue 16: a line
+  // of racks is bound by the cache lines each slave's round touches, not by instructions).
   EsmState state_ = EsmState::Init;
   bool outputs_valid_ = false;
   bool dirty_ = true;
   bool fault_error_seen_ = false;  // a RIM went to ERROR for a wiring fault once
+  // The cyclic walk over the modules: each one's driver and rims_[its RIM].state == Online,
+  // kept by set_rim_state (one array instead of the drivers, the module -> RIM map and the
+  // RIM states). Index = module number - 1.
+  struct CycleCard {
+    CardDriver* driver;
+    bool rim_online;
+  };
+  std::vector<CycleCard> cycle_;
   double t0_ = 0.0;
   double last_t_ = 0.0;
   double plant_t_ = 0.0;
   double cpu_next_publish_ = 0.0;
-  std::vector<std::unique_ptr<CardDriver>> drivers_;  // index = module number - 1
-  std::vector<uint8_t> module_rim_;                   // index = module number - 1
   std::vector<uint16_t> fault_drivers_;  // drivers that detect wiring faults (by card kind)
-  std::vector<uint32_t> last_safe_, last_unsafe_;
   std::unique_ptr<ChannelDiagnostics> channel_diag_;  // after drivers_ exist
   std::map<std::string, std::unique_ptr<StateSpacePlant>> plants_;
+  mdp::Device& device_;
+  RackOptions options_;
+  std::vector<std::unique_ptr<CardDriver>> drivers_;  // index = module number - 1
+  std::vector<uint8_t> module_rim_;                   // index = module number - 1
+  std::vector<uint32_t> last_safe_, last_unsafe_;
   std::chrono::steady_clock::time_point start_;  // now() = 0 (the default clock)
-  // rims_[r].state == Online by RIM number, kept by set_rim_state: the cyclic path's test.
-  std::array<bool, 256> rim_online_{};
 
   std::vector<UartDriver*> uarts_;
   std::map<uint8_t, RimStatus> rims_;

@@ -93,6 +93,25 @@ TEST_F(Cyclic, StateSyncAndWatchdogEventsReachListeners) {
   EXPECT_EQ(rec.calls, (std::vector<std::string>{"state 1->2", "sync0", "watchdog"}));
 }
 
+TEST_F(Cyclic, AnEventsOnlyListenerHearsEverythingButTheCycle) {
+  Recorder events;
+  device->add_listener(&events, Device::ListenerScope::EventsOnly);
+  device->state_changed(EsmState::Init, EsmState::PreOp);
+  std::vector<uint8_t> sm2(device->output_bytes(), 0);
+  std::vector<uint8_t> sm3(device->input_bytes(), 0);
+  device->write_outputs(sm2);
+  device->read_inputs(sm3);
+  device->sync_event(0, 1000);
+  device->watchdog_expired();
+  EXPECT_EQ(events.calls, (std::vector<std::string>{"state 1->2", "watchdog"}));
+  // The other listener still hears the cyclic callbacks, in order.
+  EXPECT_EQ(rec.calls,
+            (std::vector<std::string>{"state 1->2", "outputs", "inputs", "sync0", "watchdog"}));
+  device->remove_listener(&events);
+  device->state_changed(EsmState::PreOp, EsmState::Init);
+  EXPECT_EQ(events.calls.size(), 2u);
+}
+
 TEST_F(Cyclic, InputLatchTimestampsFollowTheInputUpdate) {
   device->sync_event(0, 123456789);
   std::vector<uint8_t> sm3(3);

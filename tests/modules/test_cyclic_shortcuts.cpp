@@ -69,3 +69,28 @@ TEST_F(RackTest, SubstituteCodesGiveWayToTheSameInputsAfterTheRimReturns) {
   EXPECT_EQ(din.inputs()[1].code, 1u);
   EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1), before);
 }
+
+TEST_F(RackTest, AnOfflineRimIsLeftOutOfTheCycleUntilItReturns) {
+  CardDriver& dout = at(2, 7);
+  CardDriver& din = at(2, 8);  // channels 0,1 looped from slot 7
+  to_op();
+  module_obj(dout, 0x7000, 0x0).set_u(1, 0x1);
+  cycle();
+  ASSERT_EQ(dout.outputs()[0].driven, 1.0);
+  rack.set_rim_state(2, RimState::Offline);
+  // New output data while the RIM is offline is not driven, and its inputs read 0.
+  module_obj(dout, 0x7000, 0x0).set_u(1, 0x3);
+  cycle();
+  cycle();
+  EXPECT_EQ(dout.outputs()[0].driven, 0.0);
+  EXPECT_EQ(dout.outputs()[1].driven, 0.0);
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1), 0u);
+  // Back online: the outputs follow the master's data at once, the inputs with the next cycle.
+  rack.set_rim_state(2, RimState::Online);
+  EXPECT_EQ(dout.outputs()[1].driven, 1.0);
+  module_obj(dout, 0x7000, 0x0).set_u(1, 0x2);
+  cycle();
+  EXPECT_EQ(dout.outputs()[0].driven, 0.0);
+  EXPECT_EQ(dout.outputs()[1].driven, 1.0);
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x2u);
+}
