@@ -2,7 +2,6 @@
 // and system time, offset, delay, the system-time difference and control loop driven by the
 // master's ARMW/FRMW of 0x0910, and the SYNC0/SYNC1 cyclic unit.
 #include <algorithm>
-#include <array>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
@@ -52,40 +51,6 @@ void Esc::dc_latch_receive_times() {
 
 void Esc::dc_prepare_system_time_read() {
   le::put64(&mem_[reg::kDcSystemTime], system_time(pass_.port0_ns));
-}
-
-uint8_t Esc::system_time_datagram(Command cmd, uint8_t* data, uint16_t len, bool addressed) {
-  switch (cmd) {
-    case Command::Armw:
-    case Command::Frmw:
-      // ETG.1000.4 §5.4.3: the addressed slave reads, every other slave writes.
-      if (addressed) {
-        read_system_time(data, len, false);
-        return 1;
-      }
-      return write_system_time(data, len) ? 1 : 0;
-    case Command::Aprd:
-    case Command::Fprd:
-    case Command::Brd:
-      read_system_time(data, len, cmd == Command::Brd);
-      return 1;
-    case Command::Apwr:
-    case Command::Fpwr:
-    case Command::Bwr:
-      return write_system_time(data, len) ? 1 : 0;
-    case Command::Aprw:
-    case Command::Fprw:
-    case Command::Brw: {
-      // The old content goes back (ORed for BRW) while the incoming time is compared: WKC +1
-      // for the read, +2 for the write (ETG.1000.4 §5.4.4).
-      std::array<uint8_t, 8> incoming{};
-      std::memcpy(incoming.data(), data, len);
-      read_system_time(data, len, cmd == Command::Brw);
-      return static_cast<uint8_t>(1 + (write_system_time(incoming.data(), len) ? 2 : 0));
-    }
-    default:
-      return 0;
-  }
 }
 
 bool Esc::write_system_time(const uint8_t* src, uint16_t len) {

@@ -158,9 +158,7 @@ void Esc::process_datagram(uint8_t* datagram, uint16_t data_len) {
   // Read-multiple-write: the addressed slave reads, every other slave writes (§5.4.3); the
   // other commands only act where they address.
   if (physical && (addressed || cmd == Command::Armw || cmd == Command::Frmw)) {
-    wkc = is_system_time_access(ado, data_len)
-              ? system_time_datagram(cmd, data, data_len, addressed)
-              : process_physical(command, ado, data, data_len, addressed);
+    wkc = process_physical(command, ado, data, data_len, addressed);
   }
   if (wkc != 0) {
     uint8_t* counter = data + data_len;
@@ -198,14 +196,8 @@ uint8_t Esc::process_physical(uint8_t command, uint16_t address, uint8_t* data, 
       return physical_write(address, data, len) ? 1 : 0;
     case Command::Aprw:
     case Command::Fprw:
-    case Command::Brw: {
-      // Read-write: the datagram returns the old content (ORed for BRW) while the incoming
-      // data is written; WKC +1 for the read, +2 for the write (ETG.1000.4 §5.4.4).
-      std::memcpy(scratch_.data(), data, len);
-      const bool r = physical_read(address, data, len, cmd == Command::Brw);
-      const bool w = physical_write(address, scratch_.data(), len);
-      return static_cast<uint8_t>((r ? 1 : 0) + (w ? 2 : 0));
-    }
+    case Command::Brw:
+      return physical_read_write(address, data, len, cmd == Command::Brw);
     case Command::Armw:
     case Command::Frmw:
       // Read-multiple-write: the addressed slave reads, every other slave writes (§5.4.3).
@@ -216,7 +208,16 @@ uint8_t Esc::process_physical(uint8_t command, uint16_t address, uint8_t* data, 
   }
 }
 
-bool Esc::physical_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge_or) {
+uint8_t Esc::physical_read_write(uint16_t address, uint8_t* data, uint16_t len, bool merge_or) {
+  // The datagram returns the old content (ORed for BRW) while the incoming data is written;
+  // WKC +1 for the read, +2 for the write (ETG.1000.4 §5.4.4).
+  std::memcpy(scratch_.data(), data, len);
+  const bool r = physical_read(address, data, len, merge_or);
+  const bool w = physical_write(address, scratch_.data(), len);
+  return static_cast<uint8_t>((r ? 1 : 0) + (w ? 2 : 0));
+}
+
+bool Esc::generic_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge_or) {
   const uint32_t end = static_cast<uint32_t>(address) + len;
   const uint16_t meeting = sm_meeting(address, end);
   if (!sm_allows_read(meeting)) return false;
@@ -236,7 +237,7 @@ bool Esc::physical_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge
   return true;
 }
 
-bool Esc::physical_write(uint16_t address, const uint8_t* src, uint16_t len) {
+bool Esc::generic_write(uint16_t address, const uint8_t* src, uint16_t len) {
   const uint16_t meeting = sm_meeting(address, static_cast<uint32_t>(address) + len);
   if (!sm_allows_write(meeting)) return false;
   if (write_protection_active()) return protected_write(address, src, len);

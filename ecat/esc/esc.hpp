@@ -222,8 +222,34 @@ class Esc {
   // esc.cpp: reset, datagram dispatch, physical access.
   void power_on_reset();
   bool addressed_by_station(uint16_t adp) const;
-  bool physical_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge_or);
-  bool physical_write(uint16_t address, const uint8_t* src, uint16_t len);
+  // The system time 0x0910 alone, 4 or 8 bytes, with no SyncManager over it: the access every
+  // DC master makes every cycle (FRMW/ARMW, ETG.1000.4 §9). For these bytes the register rules
+  // come down to one read and one compare (0x0910 has no ECAT-writable bit, raises no event
+  // and shares its range with no other register), so physical_read/physical_write serve them
+  // with read_system_time/write_system_time instead of the mask table and the event rewrite.
+  bool is_system_time_access(uint16_t address, uint16_t len) const {
+    return address == reg::kDcSystemTime && (len == 4 || len == 8) &&
+           static_cast<uint32_t>(reg::kDcSystemTime) + len <= sm_first_byte_;
+  }
+  // One side of a physical datagram; false when the register or SyncManager rules refuse it
+  // (no WKC). merge_or: BRD/BRW OR the memory into the datagram. The system time 0x0910 alone
+  // has its own read and write (is_system_time_access), every other range the generic rules.
+  bool physical_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge_or) {
+    if (!is_system_time_access(address, len)) return generic_read(address, dst, len, merge_or);
+    read_system_time(dst, len, merge_or);
+    return true;
+  }
+  bool physical_write(uint16_t address, const uint8_t* src, uint16_t len) {
+    if (!is_system_time_access(address, len)) return generic_write(address, src, len);
+    return write_system_time(src, len);
+  }
+  // The generic rules and the read-write commands (APRW/FPRW/BRW: both sides, the read first,
+  // their working counter) stay out of line: process_physical is then a dispatcher without a
+  // stack frame, and the FRMW 0x0910 every DC cycle passes through it in a few instructions.
+  [[gnu::noinline]] bool generic_read(uint16_t address, uint8_t* dst, uint16_t len, bool merge_or);
+  [[gnu::noinline]] bool generic_write(uint16_t address, const uint8_t* src, uint16_t len);
+  [[gnu::noinline]] uint8_t physical_read_write(uint16_t address, uint8_t* data, uint16_t len,
+                                                bool merge_or);
   // A physical datagram where it acts (where it addresses; ARMW/FRMW everywhere) through the
   // register and SyncManager rules; returns its working counter.
   uint8_t process_physical(uint8_t command, uint16_t address, uint8_t* data, uint16_t len,
@@ -357,16 +383,6 @@ class Esc {
   // distributed_clock.cpp
   void dc_latch_receive_times();
   void dc_system_time_written(uint16_t address, const uint8_t* src, uint16_t len);
-  // The system time 0x0910 alone, 4 or 8 bytes, with no SyncManager over it: the access every
-  // DC master makes every cycle (FRMW/ARMW, ETG.1000.4 §9). For these bytes the register rules
-  // come down to one read and one compare (0x0910 has no ECAT-writable bit, raises no event
-  // and shares its range with no other register), which system_time_datagram does without
-  // the generic register path (physical_read/physical_write); same data, WKC and effects.
-  bool is_system_time_access(uint16_t address, uint16_t len) const {
-    return address == reg::kDcSystemTime && (len == 4 || len == 8) &&
-           static_cast<uint32_t>(reg::kDcSystemTime) + len <= sm_first_byte_;
-  }
-  uint8_t system_time_datagram(Command cmd, uint8_t* data, uint16_t len, bool addressed);
   // ESC datasheet 0x0910 read: the system time when the frame passed, latched into the
   // register and copied (ORed for BRD/BRW) into `dst`.
   void read_system_time(uint8_t* dst, uint16_t len, bool merge_or);

@@ -183,6 +183,38 @@ TEST_F(SystemTimeCompare, FrmwFromTheMiddleComparesNothing) {
   EXPECT_EQ(difference(1), before);
 }
 
+TEST_F(SystemTimeCompare, ReadWriteReturnsTheTimeAndCompares) {
+  // FPRW: the old content goes back (WKC +1) while the incoming time is compared (+2).
+  std::array<uint64_t, kSlaves> before{};
+  for (size_t k = 0; k < kSlaves; ++k) before[k] = system_time(k);
+  const uint32_t untouched = difference(2);
+  const uint64_t sent = before[1] - kDelay[1] + 400;
+  std::vector<uint8_t> data(8);
+  for (size_t i = 0; i < 8; ++i) data[i] = static_cast<uint8_t>(sent >> 8 * i);
+  const Reply r = line.master->send(Command::Fprw, Line::station(1), 0x0910, data);
+  EXPECT_EQ(r.wkc, 3);
+  uint64_t returned = 0;
+  for (size_t i = 0; i < 8; ++i) returned |= static_cast<uint64_t>(r.data[i]) << 8 * i;
+  EXPECT_EQ(returned, before[1]);
+  EXPECT_EQ(difference(1), expected_difference(400));
+  EXPECT_EQ(system_time(1), before[1] + 200);
+  EXPECT_EQ(difference(2), untouched);  // not addressed
+}
+
+TEST_F(SystemTimeCompare, BroadcastReadsOrTheTimes) {
+  // BRD and BRW OR every slave's time into the datagram; BRD counts 1 per slave, BRW 3.
+  uint64_t ored = 0;
+  for (size_t k = 0; k < kSlaves; ++k) ored |= system_time(k);
+  for (const Command cmd : {Command::Brd, Command::Brw}) {
+    SCOPED_TRACE(static_cast<int>(cmd));
+    const Reply r = line.master->send(cmd, 0, 0x0910, std::vector<uint8_t>(8, 0));
+    EXPECT_EQ(r.wkc, cmd == Command::Brd ? kSlaves : 3 * kSlaves);
+    uint64_t returned = 0;
+    for (size_t i = 0; i < 8; ++i) returned |= static_cast<uint64_t>(r.data[i]) << 8 * i;
+    EXPECT_EQ(returned, ored);
+  }
+}
+
 TEST_F(SystemTimeCompare, WriteProtectedSlaveDiscardsTheCompare) {
   // Register write protection (0x0021 bit 0) without the enable 0x0020 in the same frame: the
   // write is discarded and gets no working counter.
