@@ -14,6 +14,7 @@
 // hands it each datagram of each frame in line order; tests may drive it the same way.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -312,6 +313,24 @@ class Esc {
   // counter, or -1 when an FMMU the datagram meets is not whole or only partly covered.
   int process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data,
                           uint16_t len, uint16_t fmmus);
+  // One side of a logical datagram, its reads or its writes: the FMMUs it goes through (bit n
+  // = FMMU n) and the datagram bytes they cover, [first, end) relative to its data. LRW reads
+  // the old memory into the datagram while writing the incoming data (ETG.1000.4 §5.4.3):
+  // where the reads' bytes meet the writes', the incoming bytes are kept aside first.
+  struct FmmuSide {
+    uint16_t fmmus = 0;
+    uint32_t first = UINT32_MAX;
+    uint32_t end = 0;
+    void add(int fmmu, uint32_t part_first, uint32_t part_end) {
+      fmmus = static_cast<uint16_t>(fmmus | (1u << fmmu));
+      first = std::min(first, part_first);
+      end = std::max(end, part_end);
+    }
+    bool meets(const FmmuSide& other) const { return first < other.end && other.first < end; }
+  };
+  // Copies the incoming bytes the writes take aside (scratch_, at the same offsets) and
+  // returns where the writes find them.
+  const uint8_t* keep_incoming(const uint8_t* data, const FmmuSide& writes);
   // What process_whole_fmmus works out for a datagram from the FMMU configuration alone, kept
   // for the last one (the cyclic frame repeats it) until an FMMU or SM is (re)loaded.
   struct WholePlan {
@@ -320,12 +339,10 @@ class Esc {
     uint16_t len = 0;
     uint16_t fmmus = 0;
     uint8_t usable = 0;
-    bool whole = false;  // every FMMU the datagram meets is whole and completely covered
-    uint16_t reads = 0;
-    uint16_t writes = 0;
+    bool whole = false;          // every FMMU the datagram meets is whole and completely covered
     bool keep_incoming = false;  // the reads fill bytes the writes take
-    uint32_t write_first = 0;    // datagram bytes the writes take: [write_first, write_end)
-    uint32_t write_end = 0;
+    FmmuSide reads{};
+    FmmuSide writes{};
   };
   void plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus);
   bool whole_fmmu_read(int index, uint8_t* dst);

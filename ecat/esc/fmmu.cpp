@@ -165,15 +165,10 @@ uint8_t Esc::walk_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* 
   const uint64_t dg_hi = (static_cast<uint64_t>(address) + len) * 8 - 1;
 
   // Each FMMU the command may use is intersected with the datagram once (spans[n] for FMMU
-  // n); the datagram bytes the reads fill and the writes take are tracked as two byte ranges
-  // (relative to data).
+  // n) and counted in the side(s) it serves.
   std::array<FmmuSpan, kFmmus> spans;  // NOLINT: filled for the FMMUs in reads | writes
-  uint16_t reads = 0;
-  uint16_t writes = 0;
-  uint64_t read_first = UINT64_MAX;
-  uint64_t read_last = 0;
-  uint64_t write_first = UINT64_MAX;
-  uint64_t write_last = 0;
+  FmmuSide reads;
+  FmmuSide writes;
   for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const int index = std::countr_zero(m);
     const FmmuState& f = fmmu_[index];
@@ -182,36 +177,20 @@ uint8_t Esc::walk_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* 
     FmmuSpan& s = spans[static_cast<size_t>(index)];
     if (!intersect_fmmu(f, dg_lo, dg_hi, s)) continue;
     s.fmmu = index;
-    const uint64_t first = s.lo / 8 - address;
-    const uint64_t last = s.hi / 8 - address;
-    const auto bit = static_cast<uint16_t>(1u << index);
-    if ((use & 0x01) != 0) {
-      reads = static_cast<uint16_t>(reads | bit);
-      read_first = std::min(read_first, first);
-      read_last = std::max(read_last, last);
-    }
-    if ((use & 0x02) != 0) {
-      writes = static_cast<uint16_t>(writes | bit);
-      write_first = std::min(write_first, first);
-      write_last = std::max(write_last, last);
-    }
+    const auto first = static_cast<uint32_t>(s.lo / 8 - address);
+    const auto end = static_cast<uint32_t>(s.hi / 8 - address + 1);
+    if ((use & 0x01) != 0) reads.add(index, first, end);
+    if ((use & 0x02) != 0) writes.add(index, first, end);
   }
-  if ((reads | writes) == 0) return 0;
-  // LRW reads the old memory into the datagram while writing the incoming data (ETG.1000.4
-  // §5.4.3): when the bytes the reads fill meet the bytes the writes take, the incoming ones
-  // are kept aside first (only those, at the same offsets).
-  const uint8_t* incoming = data;
-  if (reads != 0 && writes != 0 && read_first <= write_last && write_first <= read_last) {
-    std::memcpy(scratch_.data() + write_first, data + write_first, write_last - write_first + 1);
-    incoming = scratch_.data();
-  }
+  if ((reads.fmmus | writes.fmmus) == 0) return 0;
+  const uint8_t* incoming = reads.meets(writes) ? keep_incoming(data, writes) : data;
 
   bool read_done = false;
   bool write_done = false;
-  for (uint16_t m = reads; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+  for (uint16_t m = reads.fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     read_done |= fmmu_read(spans[static_cast<size_t>(std::countr_zero(m))], dg_lo, data);
   }
-  for (uint16_t m = writes; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+  for (uint16_t m = writes.fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     write_done |= fmmu_write(spans[static_cast<size_t>(std::countr_zero(m))], dg_lo, incoming);
   }
   // ETG.1000.4 §5.4.4: LRD and LWR count 1 per slave; LRW counts 1 for a read, 2 for a write.
@@ -219,14 +198,15 @@ uint8_t Esc::walk_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* 
   return (read_done || write_done) ? 1 : 0;
 }
 
+const uint8_t* Esc::keep_incoming(const uint8_t* data, const FmmuSide& writes) {
+  std::memcpy(scratch_.data() + writes.first, data + writes.first, writes.end - writes.first);
+  return scratch_.data();
+}
+
 void Esc::plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus) {
   WholePlan& p = whole_plan_;
   p = WholePlan{true, address, len, fmmus, usable};
   const uint64_t dg_end = static_cast<uint64_t>(address) + len;
-  uint32_t read_first = UINT32_MAX;
-  uint32_t read_end = 0;
-  uint32_t write_first = UINT32_MAX;
-  uint32_t write_end = 0;
   for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const int index = std::countr_zero(m);
     const FmmuState& f = fmmu_[index];
@@ -236,29 +216,16 @@ void Esc::plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint1
     const uint64_t end = lo + f.length;
     if (end <= address || lo >= dg_end) continue;  // does not meet the datagram
     if ((fmmu_whole_mask_ & (1u << index)) == 0 || lo < address || end > dg_end) {
-      p.reads = p.writes = 0;
+      p.reads = p.writes = FmmuSide{};
       return;  // the bit-wise walk
     }
     const auto first = static_cast<uint32_t>(lo - address);
     const auto last_end = static_cast<uint32_t>(end - address);
-    const auto bit = static_cast<uint16_t>(1u << index);
-    if ((use & 0x01) != 0) {
-      p.reads = static_cast<uint16_t>(p.reads | bit);
-      read_first = std::min(read_first, first);
-      read_end = std::max(read_end, last_end);
-    }
-    if ((use & 0x02) != 0) {
-      p.writes = static_cast<uint16_t>(p.writes | bit);
-      write_first = std::min(write_first, first);
-      write_end = std::max(write_end, last_end);
-    }
+    if ((use & 0x01) != 0) p.reads.add(index, first, last_end);
+    if ((use & 0x02) != 0) p.writes.add(index, first, last_end);
   }
   p.whole = true;
-  // As process_logical: the incoming bytes the reads would overwrite are kept aside first.
-  p.keep_incoming =
-      p.reads != 0 && p.writes != 0 && read_first < write_end && write_first < read_end;
-  p.write_first = write_first;
-  p.write_end = write_end;
+  p.keep_incoming = p.reads.meets(p.writes);
 }
 
 int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data,
@@ -268,19 +235,15 @@ int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint
     plan_whole_fmmus(usable, address, len, fmmus);
   }
   if (!p.whole) return -1;
-  if ((p.reads | p.writes) == 0) return 0;
-  const uint8_t* incoming = data;
-  if (p.keep_incoming) {
-    std::memcpy(scratch_.data() + p.write_first, data + p.write_first, p.write_end - p.write_first);
-    incoming = scratch_.data();
-  }
+  if ((p.reads.fmmus | p.writes.fmmus) == 0) return 0;
+  const uint8_t* incoming = p.keep_incoming ? keep_incoming(data, p.writes) : data;
   bool read_done = false;
   bool write_done = false;
-  for (uint16_t m = p.reads; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+  for (uint16_t m = p.reads.fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const int index = std::countr_zero(m);
     read_done |= whole_fmmu_read(index, data + (fmmu_[index].logical_start - address));
   }
-  for (uint16_t m = p.writes; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+  for (uint16_t m = p.writes.fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const int index = std::countr_zero(m);
     write_done |= whole_fmmu_write(index, incoming + (fmmu_[index].logical_start - address));
   }
