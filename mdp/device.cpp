@@ -83,7 +83,6 @@ struct Device::Impl final : DeviceRuntime {
   // line of devices is bound by cache misses, not instructions).
   // The listeners of the cyclic callbacks (ListenerScope::All), a subset of `listeners`.
   std::vector<CycleListener*> cycle_listeners;
-  std::optional<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
   // 0xF6F0/0xF6F2 (input latch times): their entries' slots, found once when the dictionary is
   // built, so the cyclic path does no dictionary or entry lookup.
   std::vector<coe::EntrySlot> latch_local_slots, latch_esc_slots;
@@ -94,6 +93,7 @@ struct Device::Impl final : DeviceRuntime {
   uint64_t latch_esc_value = 0;
   bool latch_esc_stale = true;
   std::chrono::steady_clock::time_point power_on = std::chrono::steady_clock::now();
+  std::optional<coe::ProcessImage> image;  // 0x1C12/0x1C13 compiled to bit copies
   RackConfig config;
   coe::ObjectDictionary od;
   std::unique_ptr<coe::SdoServer> sdo;

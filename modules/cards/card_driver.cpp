@@ -9,15 +9,16 @@ namespace rackcat::modules {
 
 CardDriver::CardDriver(const mdp::Module& module, coe::ObjectDictionary& od, size_t inputs,
                        size_t outputs)
-    : module_(module), od_(od), inputs_(inputs), outputs_(outputs) {
+    : inputs_(inputs), outputs_(outputs), module_(module), od_(od) {
   for (auto& in : inputs_) in.source = std::make_unique<ConstantSource>(0.0);
   namespace sv = mdp::substitute;
   output_reaction_ = object(0x4000, sv::kOutputReaction);
   input_reaction_ = object(0x4000, sv::kInputReaction);
   input_value_ = object(0x4000, sv::kInputValue);
-  input_status_ = object(0x4000, sv::kInputStatus);
   if (input_reaction_ != nullptr) reaction_channels_ = input_reaction_->max_subindex();
-  if (input_status_ != nullptr) input_status_slot_ = coe::EntrySlot(*input_status_, 0);
+  if (coe::Object* status = object(0x4000, sv::kInputStatus)) {  // 0x4nnC
+    input_status_slot_ = coe::EntrySlot(*status, 0);
+  }
 }
 
 uint16_t CardDriver::output_reaction(size_t i) const {

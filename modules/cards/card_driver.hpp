@@ -134,14 +134,12 @@ class CardDriver {
   // Puts `code` as input i's process-data value (every sample of an oversampled card).
   virtual void put_input_code(size_t /*i*/, uint32_t /*code*/) {}
 
-  const mdp::Module& module_;
-  coe::ObjectDictionary& od_;
+  // What every cycle reads comes first, the set-up references last (issue 16: a line of racks
+  // is bound by the cache lines each driver's round touches; a derived driver's own per-cycle
+  // fields follow these).
   std::vector<InputChannel> inputs_;
   std::vector<OutputChannel> outputs_;
-  coe::Object* output_reaction_ = nullptr;  // 0x4nn8
-  coe::Object* input_reaction_ = nullptr;   // 0x4nnA
-  coe::Object* input_value_ = nullptr;      // 0x4nnB
-  coe::Object* input_status_ = nullptr;     // 0x4nnC
+  coe::Object* input_reaction_ = nullptr;  // 0x4nnA
   // Cyclic path: the channels 0x4nnA has entries for, and 0x4nnC's value slot.
   size_t reaction_channels_ = 0;
   coe::EntrySlot input_status_slot_;
@@ -150,6 +148,12 @@ class CardDriver {
   uint64_t drive_epoch_ = 1;  // counts drive() calls
   uint64_t taken_epoch_ = 0;  // drive_epoch_ at outputs_taken() (0: never)
   uint32_t taken_word_ = 0;
+
+ protected:
+  coe::Object* output_reaction_ = nullptr;  // 0x4nn8
+  coe::Object* input_value_ = nullptr;      // 0x4nnB
+  const mdp::Module& module_;
+  coe::ObjectDictionary& od_;
 };
 
 // The driver for a module's card (by the catalogue's Signal); every input starts with a

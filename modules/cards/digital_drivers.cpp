@@ -39,9 +39,9 @@ class DigitalInputDriver final : public CardDriver {
  public:
   DigitalInputDriver(const mdp::Module& m, coe::ObjectDictionary& od)
       : CardDriver(m, od, m.card->channels, 0),
-        obj_(require_object(od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)),
-        inverted_(m.card->signal == mdp::Signal::DigitalInInverted),
         samples_(m.card->samples),
+        inverted_(m.card->signal == mdp::Signal::DigitalInInverted),
+        obj_(require_object(od, m.index(0x6000, static_cast<uint8_t>(*m.card->input)), m)),
         word_(obj_, 1) {
     if (samples_ > 1) {
       raw_ = obj_.bytes(1);
@@ -122,14 +122,15 @@ class DigitalInputDriver final : public CardDriver {
     codes_current_ = true;
   }
 
-  coe::Object& obj_;
-  bool inverted_;
+  // Per-cycle fields first (after the base's, issue 16).
   unsigned samples_;
+  bool inverted_;
+  bool codes_current_ = false;  // the channels' codes hold coded_word_, no code changed since
+  uint32_t coded_word_ = 0;     // the word inputs_code() last stored in the channels' codes
+  coe::Object& obj_;
   coe::EntrySlot word_;  // DINx16 / DINx8 (DINx4 is a BIT4: set_u fallback)
   std::span<uint8_t> raw_;
   unsigned sample_bytes_ = 1;
-  uint32_t coded_word_ = 0;     // the word inputs_code() last stored in the channels' codes
-  bool codes_current_ = false;  // ...and no code changed since
 };
 
 // Reads the digital output word of 0x7nnX and applies 0x4nn0/0x4nn1 on leaving OP.
@@ -137,13 +138,13 @@ class DigitalOutputs {
  public:
   DigitalOutputs(coe::ObjectDictionary& od, const mdp::Module& m)
       : out_(require_object(od, m.index(0x7000, static_cast<uint8_t>(*m.card->output)), m)),
+        word_(out_, 1),
+        mask_(m.card->channels >= 32 ? 0xFFFFFFFFu : (1u << m.card->channels) - 1u),
+        channels_(m.card->channels),
         safe_(
             m.card->safe_state
                 ? &require_object(od, m.index(0x4000, static_cast<uint8_t>(*m.card->safe_state)), m)
-                : nullptr),
-        channels_(m.card->channels),
-        mask_(channels_ >= 32 ? 0xFFFFFFFFu : (1u << channels_) - 1u),
-        word_(out_, 1) {}
+                : nullptr) {}
 
   uint32_t commanded() const { return static_cast<uint32_t>(word_.get()) & mask_; }
   uint32_t safe_word(uint32_t current) const {
@@ -173,11 +174,12 @@ class DigitalOutputs {
   }
 
  private:
+  // commanded()'s fields first: it runs every cycle (issue 16).
   coe::Object& out_;
-  coe::Object* safe_;
-  unsigned channels_;
-  uint32_t mask_;
   coe::EntrySlot word_;  // 0x7nnX:01
+  uint32_t mask_;
+  unsigned channels_;
+  coe::Object* safe_;
 };
 
 uint32_t driven_word(std::span<const OutputChannel> outs) {

@@ -1,6 +1,9 @@
 // Per-channel diagnosis messages of the slot cards: see channel_diagnostics.hpp.
 #include "modules/rack/channel_diagnostics.hpp"
 
+#include <algorithm>
+#include <stdexcept>
+
 #include "mdp/diagnosis_catalogue.hpp"
 #include "modules/cards/uart_driver.hpp"
 
@@ -63,7 +66,6 @@ ChannelDiagnostics::ChannelDiagnostics(mdp::Device& device,
       drivers_(drivers),
       uarts_(drivers.size(), nullptr),
       input_causes_(drivers.size(), 0),
-      active_(drivers.size(), 0),
       inputs_(drivers.size()),
       outputs_(drivers.size()),
       uart_errors_(drivers.size()) {
@@ -71,9 +73,16 @@ ChannelDiagnostics::ChannelDiagnostics(mdp::Device& device,
     uarts_[i] = dynamic_cast<UartDriver*>(drivers[i].get());
     input_causes_[i] =
         drivers[i]->has_sensor_break() || drivers[i]->card().signal == mdp::Signal::AnalogIn;
-    active_[i] = input_causes_[i] || uarts_[i] != nullptr;
+    if (input_causes_[i] || uarts_[i] != nullptr) watched_.push_back(static_cast<uint16_t>(i));
   }
   reset();
+}
+
+void ChannelDiagnostics::watch_outputs(size_t module_index) {
+  if (module_index >= drivers_.size()) throw std::out_of_range("no module at this index");
+  const auto i = static_cast<uint16_t>(module_index);
+  const auto at = std::lower_bound(watched_.begin(), watched_.end(), i);
+  if (at == watched_.end() || *at != i) watched_.insert(at, i);
 }
 
 void ChannelDiagnostics::reset() {

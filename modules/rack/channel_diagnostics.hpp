@@ -36,13 +36,14 @@ class ChannelDiagnostics {
   // Device thread, no allocation. `online(module index)`: the module's RIM is online.
   template <class Online>
   void evaluate(Online&& online) {
-    for (size_t i = 0; i < drivers_.size(); ++i) {
-      if (active_[i] && online(i)) evaluate_module(i);
+    for (const uint16_t i : watched_) {
+      if (online(i)) evaluate_module(i);
     }
   }
   // An output fault (overload / overtemperature) was injected on module index i: its output
-  // channels are evaluated from now on (without one they have no cause to report).
-  void watch_outputs(size_t module_index) { active_.at(module_index) = 1; }
+  // channels are evaluated from now on (without one they have no cause to report). Throws
+  // std::out_of_range for an index without a module.
+  void watch_outputs(size_t module_index);
   // Forget what was reported (0xFBF0 device reset: the history is empty again); the next
   // evaluate() reports what is still active.
   void reset();
@@ -51,15 +52,16 @@ class ChannelDiagnostics {
   void evaluate_module(size_t i);
   void report(size_t module_index, size_t channel, uint16_t text);
 
+  // The modules that can have anything to report, in module order: input causes, a UART, or
+  // an output fault injected once (watch_outputs). The cyclic path visits only these (issue
+  // 16: the others cost a line of racks nothing, not even a flag per module).
+  std::vector<uint16_t> watched_;
   mdp::Device& device_;
   std::span<const std::unique_ptr<CardDriver>> drivers_;
   std::vector<UartDriver*> uarts_;  // index = module index, null if no UART
   // Whether the card's inputs can have a cause at all (sensor break, analog limits): fixed by
   // the card kind, so the cyclic path skips the channels of the others.
   std::vector<uint8_t> input_causes_;
-  // Whether a module can have anything to report: input causes, a UART, or an output fault
-  // injected once (watch_outputs). The cyclic path skips the others.
-  std::vector<uint8_t> active_;
   std::vector<std::array<uint8_t, 16>> inputs_;   // reported cause bits per input channel
   std::vector<std::array<uint8_t, 16>> outputs_;  // ... per output channel
   std::vector<std::array<uint8_t, 4>> uart_errors_;

@@ -41,8 +41,8 @@ bool parse_u8(std::string_view s, uint8_t& out) {
 }  // namespace
 
 Rack::Rack(mdp::Device& device, RackOptions options)
-    : device_(device),
-      options_(std::move(options)),
+    : options_(std::move(options)),
+      device_(device),
       // ExceptionTree is the MDP exception tree (the guide's diagnosis objects), not a C++
       // exception: bugprone-throw-keyword-missing goes by the type's name alone.
       // NOLINTNEXTLINE(bugprone-throw-keyword-missing)
@@ -81,7 +81,7 @@ Rack::Rack(mdp::Device& device, RackOptions options)
     if (auto* e = dynamic_cast<EncoderDriver*>(drivers_[m.number - 1].get())) e->attach(device_);
     if (drivers_[m.number - 1]->detects_wiring_faults()) fault_drivers_.push_back(m.number - 1);
   }
-  channel_diag_ = std::make_unique<ChannelDiagnostics>(device_, drivers_);
+  channel_diag_.emplace(device_, drivers_);
 
   // A replay file is read below the rack file's own directory (mdp::FileRoot: no "..", no
   // absolute path, no symlink out of it), with the rights of the (unprivileged) process.

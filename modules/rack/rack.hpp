@@ -25,6 +25,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -190,15 +191,15 @@ class Rack : public mdp::CycleListener {
   double last_t_ = 0.0;
   double plant_t_ = 0.0;
   double cpu_next_publish_ = 0.0;
-  std::vector<uint16_t> fault_drivers_;  // drivers that detect wiring faults (by card kind)
-  std::unique_ptr<ChannelDiagnostics> channel_diag_;  // after drivers_ exist
+  std::chrono::steady_clock::time_point start_;  // now() = 0 (the default clock)
+  RackOptions options_;                          // now() asks its clock
+  std::vector<uint16_t> fault_drivers_;          // drivers that detect wiring faults (by card kind)
   std::map<std::string, std::unique_ptr<StateSpacePlant>> plants_;
+  std::optional<ChannelDiagnostics> channel_diag_;  // after drivers_ exist
   mdp::Device& device_;
-  RackOptions options_;
   std::vector<std::unique_ptr<CardDriver>> drivers_;  // index = module number - 1
   std::vector<uint8_t> module_rim_;                   // index = module number - 1
   std::vector<uint32_t> last_safe_, last_unsafe_;
-  std::chrono::steady_clock::time_point start_;  // now() = 0 (the default clock)
 
   std::vector<UartDriver*> uarts_;
   std::map<uint8_t, RimStatus> rims_;

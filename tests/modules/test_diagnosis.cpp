@@ -96,6 +96,22 @@ TEST_F(DiagnosisTest, OutputOverloadAndOvertemperature) {
                std::invalid_argument);
 }
 
+TEST_F(DiagnosisTest, OutputFaultsOfSeveralModulesReportOnceInModuleOrder) {
+  const uint16_t aout = at(1, 11).module().number;
+  const uint16_t dout = at(2, 7).module().number;
+  ASSERT_LT(aout, dout);
+  rack.set_output_fault(dout, 1, true, false);
+  rack.set_output_fault(aout, 4, true, false);
+  rack.set_output_fault(dout, 1, true, false);  // the same fault again
+  cycle();
+  const auto all = history();
+  ASSERT_GE(all.size(), 2u);
+  expect_channel_message(all[all.size() - 2], text::kOverload, aout, 4);
+  expect_channel_message(all.back(), text::kOverload, dout, 1);
+  cycle();
+  EXPECT_EQ(history().size(), all.size());
+}
+
 TEST_F(DiagnosisTest, WiringFaultsNameTheirChannel) {
   const uint16_t dout = at(1, 1).module().number;
   to_op();
