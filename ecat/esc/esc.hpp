@@ -367,10 +367,21 @@ class Esc {
   // The same with the access's place in the buffer known: `first` = it holds the buffer's first
   // byte, `last` its last byte.
   void sm_hand_over(int index, bool first, bool last, bool filler);
-  // One master access that is exactly SM n's whole buffer (in process RAM): what
-  // sm_allows_read/sm_allows_write, the copy and sm_after_read/sm_after_write do for it.
-  bool sm_master_read_buffer(int index, uint8_t* dst);
-  bool sm_master_write_buffer(int index, const uint8_t* src);
+  // One access that is exactly SM n's whole buffer (in process RAM), by the master (through
+  // an FMMU) or by the PDI: what the checks (sm_allows_read/sm_allows_write for the master,
+  // pdi_buffer_write's for the PDI), the copy and the hand-over of the first and the last byte
+  // do for it. False when the access is refused (the master gets no WKC). One instance per
+  // side (sync_manager.cpp): each side's checks fold away.
+  template <bool by_master>
+  bool sm_read_buffer(int index, uint8_t* dst);
+  template <bool by_master>
+  bool sm_write_buffer(int index, const uint8_t* src);
+  // Whether bytes [address, address + len) are SM n's whole buffer, in process RAM, shared
+  // with no other enabled SM.
+  bool whole_sm_buffer(int index, uint16_t address, uint16_t len) const {
+    return (sm_alone_mask_ & (1u << index)) != 0 && sm_[index].start == address &&
+           sm_[index].length == len && address >= reg::kProcessRam;
+  }
   // Whether the side that fills SM n's buffer may write it now (active, a mailbox not full).
   bool sm_takes_write(int index) const;
   uint8_t& sm_status(int index) { return mem_[reg::sm::base(index) + reg::kSmStatusOffset]; }

@@ -253,7 +253,7 @@ int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint
 
 bool Esc::whole_fmmu_read(int index, uint8_t* dst) {
   const uint16_t meeting = fmmu_meeting_[index];
-  if (meeting != 0) return sm_master_read_buffer(std::countr_zero(meeting), dst);
+  if (meeting != 0) return sm_read_buffer<true>(std::countr_zero(meeting), dst);
   const FmmuState& f = fmmu_[index];
   base::copy_bytes(dst, &mem_[f.physical_start], f.length);
   return true;
@@ -262,7 +262,7 @@ bool Esc::whole_fmmu_read(int index, uint8_t* dst) {
 bool Esc::whole_fmmu_write(int index, const uint8_t* src) {
   if (write_protection_active() && !write_allowed(reg::kProcessRam)) return false;  // ESC-wide
   const uint16_t meeting = fmmu_meeting_[index];
-  if (meeting != 0) return sm_master_write_buffer(std::countr_zero(meeting), src);
+  if (meeting != 0) return sm_write_buffer<true>(std::countr_zero(meeting), src);
   const FmmuState& f = fmmu_[index];
   base::copy_bytes(&mem_[f.physical_start], src, f.length);
   return true;

@@ -169,26 +169,19 @@ bool Esc::pdi_buffer_write(uint16_t address, const uint8_t* src, uint16_t len) {
 void Esc::pdi_read_buffer(uint8_t n, uint16_t address, uint8_t* dst, uint16_t len) {
   // The whole buffer of an SM alone in its bytes, in process RAM (no register side effects):
   // the same effects as the byte-wise access, found without the search.
-  if (n >= kSyncManagers || (sm_alone_mask_ & (1u << n)) == 0 || sm_[n].start != address ||
-      sm_[n].length != len || address < reg::kProcessRam) {
+  if (n < kSyncManagers && whole_sm_buffer(n, address, len)) {
+    sm_read_buffer<false>(n, dst);
+  } else {
     pdi_read(address, dst, len);
-    return;
-  }
-  std::memcpy(dst, &mem_[address], len);
-  if (sm_[n].active && sm::ecat_writes(sm_[n].control)) {
-    sm_buffer_access(n, address, static_cast<uint32_t>(address) + len, false);
   }
 }
 
 void Esc::pdi_write_buffer(uint8_t n, uint16_t address, const uint8_t* src, uint16_t len) {
-  if (n >= kSyncManagers || (sm_alone_mask_ & (1u << n)) == 0 || sm_[n].start != address ||
-      sm_[n].length != len || address < reg::kProcessRam) {
+  if (n < kSyncManagers && whole_sm_buffer(n, address, len)) {
+    sm_write_buffer<false>(n, src);
+  } else {
     pdi_write(address, src, len);
-    return;
   }
-  if (sm::ecat_writes(sm_[n].control) || !sm_takes_write(n)) return;
-  std::memcpy(&mem_[address], src, len);
-  sm_buffer_access(n, address, static_cast<uint32_t>(address) + len, true);
 }
 
 }  // namespace rackcat::ecat

@@ -229,28 +229,43 @@ void Esc::update_sm_events(int n) {
                   memory[sm::base(n) + reg::kSmStatusOffset]);
 }
 
-bool Esc::sm_master_read_buffer(int n, uint8_t* dst) {
-  // sm_allows_read: an SM the PDI deactivated, or an empty mailbox, gives no data.
+template <bool by_master>
+bool Esc::sm_read_buffer(int n, uint8_t* dst) {
+  // The SM's state is read before the copy (which may alias it for the compiler).
   const SmState& s = sm_[n];
-  if (!s.active || (sm::is_mailbox(s.control) && !sm::ecat_writes(s.control) &&
-                    (sm_status(n) & sm::kStatusFull) == 0)) {
+  const bool active = s.active;
+  const uint8_t control = s.control;
+  const bool master_fills = sm::ecat_writes(control);
+  // sm_allows_read: for the master, an SM the PDI deactivated or an empty mailbox gives no
+  // data (no WKC); the PDI reads the memory as it is.
+  if (by_master && (!active || (sm::is_mailbox(control) && !master_fills &&
+                                (sm_status(n) & sm::kStatusFull) == 0))) {
     return false;
   }
   base::copy_bytes(dst, &mem_[s.start], s.length);
-  if (!sm::ecat_writes(s.control)) sm_hand_over(n, true, true, false);
+  // The side that drains the buffer (the other side fills it) opens and completes it.
+  if (active && master_fills != by_master) sm_hand_over(n, true, true, false);
   return true;
 }
 
-bool Esc::sm_master_write_buffer(int n, const uint8_t* src) {
+template <bool by_master>
+bool Esc::sm_write_buffer(int n, const uint8_t* src) {
   const SmState& s = sm_[n];
-  if (!sm::ecat_writes(s.control) || !sm_takes_write(n)) return false;  // sm_allows_write
+  const uint8_t control = s.control;
+  // Only the side that fills the buffer writes it, a mailbox only once it is empty.
+  if (sm::ecat_writes(control) != by_master || !sm_takes_write(n)) return false;
   base::copy_bytes(&mem_[s.start], src, s.length);
   sm_hand_over(n, true, true, true);
-  // sm_after_write: a completed buffer retriggers the process-data watchdog.
-  if (!sm::is_mailbox(s.control) && (s.control & sm::kControlWatchdog)) {
+  // sm_after_write: a buffer the master completed retriggers the process-data watchdog.
+  if (by_master && !sm::is_mailbox(control) && (control & sm::kControlWatchdog)) {
     watchdog_trigger(pass_.port0_ns);
   }
   return true;
 }
+
+template bool Esc::sm_read_buffer<true>(int n, uint8_t* dst);
+template bool Esc::sm_read_buffer<false>(int n, uint8_t* dst);
+template bool Esc::sm_write_buffer<true>(int n, const uint8_t* src);
+template bool Esc::sm_write_buffer<false>(int n, const uint8_t* src);
 
 }  // namespace rackcat::ecat

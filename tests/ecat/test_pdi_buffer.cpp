@@ -186,6 +186,33 @@ TEST(PdiBuffer, BlockAccessEqualsTheByteWiseAccess) {
   EXPECT_EQ(block.aprd(kSm3, kInLen), bytes.aprd(kSm3, kInLen));
 }
 
+TEST(PdiBuffer, BlockAccessEqualsTheByteWiseAccessWhereTheRulesRefuseOrSkip) {
+  Chip block;
+  Chip bytes;
+  EscPdi pdi(block.esc);
+  for (Chip* c : {&block, &bytes}) c->apwr(kSm2, pattern(kOutLen, 4));
+  // The PDI writes only buffers the master reads: a write into SM2's outputs changes nothing.
+  const auto in = pattern(kOutLen, 9);
+  pdi.write_buffer(2, kSm2, in);
+  for (uint16_t i = 0; i < kOutLen; ++i) bytes.esc.pdi_write(kSm2 + i, &in[i], 1);
+  EXPECT_EQ(block.state(), bytes.state());
+  EXPECT_EQ(std::vector<uint8_t>(block.esc.memory().begin() + kSm2,
+                                 block.esc.memory().begin() + kSm2 + kOutLen),
+            pattern(kOutLen, 4));
+  // SM2 deactivated by the PDI (0x0817 bit 0): the PDI still reads the memory, but nothing is
+  // handed over.
+  for (Chip* c : {&block, &bytes}) {
+    const uint8_t deactivate = 0x01;
+    c->esc.pdi_write(0x0817, &deactivate, 1);
+  }
+  std::vector<uint8_t> a(kOutLen), b(kOutLen);
+  pdi.read_buffer(2, kSm2, a);
+  for (uint16_t i = 0; i < kOutLen; ++i) bytes.esc.pdi_read(kSm2 + i, &b[i], 1);
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(a, pattern(kOutLen, 4));
+  EXPECT_EQ(block.state(), bytes.state());
+}
+
 TEST(PdiBuffer, BlockAccessNotMatchingTheSyncManagerIsAPlainAccess) {
   Chip block;
   Chip plain;
