@@ -56,6 +56,8 @@ void Esc::power_on_reset() {
   reset_signal_ = true;
   sync0_running_ = sync1_running_ = false;
   watchdog_armed_ = false;
+  watchdog_running_ = true;
+  derive_configuration();
   reset_sequence_ = 0;
   local_offset_ = options_.power_on_local_time_ns - clock_.now_ns();
 
@@ -89,6 +91,10 @@ bool Esc::take_reset() {
 
 void Esc::set_port1_link(bool link) {
   port1_link_ = link;
+  // DL control 0x0101 bits 3:2 = loop control of port 1 (ETG.1000.4 §6.3.1): 00 auto, 01
+  // auto-close, 10 open, 11 closed. Auto modes open the port when a link is present.
+  const uint8_t loop = (mem_[reg::kDlControl + 1] >> 2) & 0x03;
+  forwards_port1_ = loop == 0x02 || (loop != 0x03 && port1_link_);
   // DL status 0x0110 (ETG.1000.4 Table 31): bit 0 PDI operational (EEPROM loaded), bit 1 PDI
   // watchdog not expired, bits 4-7 physical link, then per port n bit 8+2n "loop closed" and
   // bit 9+2n "communication established". Ports 2 and 3 do not exist: loop closed, no link.

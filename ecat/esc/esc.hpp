@@ -164,14 +164,7 @@ class Esc {
   void set_port1_link(bool link);
   // Whether frames leave through port 1 to the next slave: link present and the loop not
   // closed by DL control 0x0101 (ETG.1000.4 §6.3.1: 11b = closed, 01b = auto-close).
-  bool forwards_to_port1() const {
-    // DL control 0x0101 bits 3:2 = loop control of port 1: 00 auto, 01 auto-close, 10 open,
-    // 11 closed. Auto modes open the port when a link is present.
-    const uint8_t loop = (mem_[reg::kDlControl + 1] >> 2) & 0x03;
-    if (loop == 0x03) return false;
-    if (loop == 0x02) return true;
-    return port1_link_;
-  }
+  bool forwards_to_port1() const { return forwards_port1_; }
 
   // ---- observers (tests, CLI, the link) -------------------------------------------------------
   // AL status 0x0130 as the firmware last wrote it (state bits 3..0, error flag bit 4).
@@ -261,10 +254,15 @@ class Esc {
   void dc_registers_written(uint16_t address, const uint8_t* src, uint16_t len);
   void before_register_read(uint16_t address, uint16_t len);
   void after_register_read(uint16_t address, uint16_t len);
+  // Registers a cyclic frame consults but a master writes only while it configures the slave:
+  // register and ESC write protection (0x0021/0x0031 bit 0) and the process-data watchdog's
+  // period (divider 0x0400, time 0x0420; ESC datasheet). Derived when they are written and at
+  // reset, so the frame reads them from the ESC object, not from their register lines.
+  void derive_configuration();
   // write_protection.cpp; this check runs on every write.
   bool write_protection_active() const {
-    return ((mem_[reg::kWriteProtection] & 0x01) && !register_write_enabled_) ||
-           ((mem_[reg::kEscWriteProtection] & 0x01) && !esc_write_enabled_);
+    return protection_ != 0 && (((protection_ & kRegisterProtection) && !register_write_enabled_) ||
+                                ((protection_ & kEscProtection) && !esc_write_enabled_));
   }
   bool write_allowed(uint32_t address) const;
   void write_enables_written(uint16_t address, const uint8_t* src, uint16_t len);
@@ -424,7 +422,6 @@ class Esc {
   void dc_prepare_system_time_read();
   uint64_t clock_of_system_time(uint64_t system_time) const;
   // watchdog.cpp
-  uint64_t watchdog_period_ns() const;
   void watchdog_trigger(uint64_t now_ns);
   void watchdog_expired();
   // A timer was armed or moved: lowers the next-event bound (set_next_event_bound).
@@ -451,6 +448,13 @@ class Esc {
   uint32_t* fmmu_generation_ = nullptr;
 
   bool port1_link_ = false;
+  // Port 1 forwards (forwards_to_port1), derived in set_port1_link from the link and DL
+  // control 0x0101.
+  bool forwards_port1_ = false;
+  // derive_configuration: 0x0021 bit 0 (kRegisterProtection), 0x0031 bit 0 (kEscProtection).
+  static constexpr uint8_t kRegisterProtection = 0x01;
+  static constexpr uint8_t kEscProtection = 0x02;
+  uint8_t protection_ = 0;
   uint8_t reset_sequence_ = 0;           // 0x0040 'R','E','S' progress
   bool register_write_enabled_ = false;  // 0x0020 bit 0 written in the current frame
   bool esc_write_enabled_ = false;       // 0x0030 bit 0 written in the current frame
@@ -467,6 +471,8 @@ class Esc {
 
   // Process-data watchdog deadline (clock time), armed by SM2 writes with trigger enabled.
   bool watchdog_armed_ = false;
+  uint64_t watchdog_period_ns_ = 0;  // derive_configuration; 0: disabled
+  bool watchdog_running_ = true;     // 0x0440 bit 0: not expired
   uint64_t watchdog_deadline_ = 0;
   uint64_t* next_event_bound_ = nullptr;
 

@@ -8,26 +8,23 @@
 
 namespace rackcat::ecat {
 
-uint64_t Esc::watchdog_period_ns() const {
-  // One watchdog tick is (divider + 2) x 40 ns (25 MHz); the reset values give 100 µs x 1000.
-  const uint64_t tick = (static_cast<uint64_t>(le::get16(&mem_[reg::kWatchdogDivider])) + 2) * 40;
-  return tick * le::get16(&mem_[reg::kWatchdogTimeProcessData]);
-}
-
 void Esc::watchdog_trigger(uint64_t now_ns) {
-  const uint64_t period = watchdog_period_ns();
-  mem_[reg::kWatchdogStatusProcessData] |= 0x01;
-  if (period == 0) {  // time 0 disables the watchdog
+  if (!watchdog_running_) {
+    watchdog_running_ = true;
+    mem_[reg::kWatchdogStatusProcessData] |= 0x01;
+  }
+  if (watchdog_period_ns_ == 0) {  // time 0 disables the watchdog
     watchdog_armed_ = false;
     return;
   }
   watchdog_armed_ = true;
-  watchdog_deadline_ = now_ns + period;
+  watchdog_deadline_ = now_ns + watchdog_period_ns_;
   timers_changed();
 }
 
 void Esc::watchdog_expired() {
   watchdog_armed_ = false;
+  watchdog_running_ = false;
   mem_[reg::kWatchdogStatusProcessData] &= static_cast<uint8_t>(~0x01);
   if (mem_[reg::kWatchdogCounterProcessData] != 0xFF) ++mem_[reg::kWatchdogCounterProcessData];
   mem_[reg::kAlEventRequest] |= 0x40;

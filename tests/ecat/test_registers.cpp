@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "ecat/registers.hpp"
+#include "tests/ecat/chip_master.hpp"
 #include "tests/ecat/test_master.hpp"
 
 namespace rackcat::ecat::test {
@@ -127,6 +128,32 @@ TEST_F(RegisterTest, RegisterWriteProtectionNeedsEnableInTheSameFrame) {
   EXPECT_EQ(line.master->fpwr8(kStation, 0x0021, 0x00), 0);
   EXPECT_EQ(line.master->fpwr(kStation, 0x0020, {0x01, 0x00}).wkc, 1);
   EXPECT_EQ(line.master->fpwr8(kStation, 0x0138, 0x00), 1);
+}
+
+TEST(WatchdogRegisters, PeriodAndStatusFollowTheRegisters) {
+  // Process-data watchdog (ESC datasheet 0x0400/0x0420/0x0440): each completed SM2 write with
+  // the trigger bit arms it for (divider + 2) x 40 ns x time; expiry clears 0x0440 bit 0, the
+  // next trigger sets it again. A new divider or time applies from the next trigger on.
+  ChipMaster chip;
+  chip.sm(2, 0x1100, 4, 0x64);  // buffered, ECAT writes, AL event, watchdog trigger
+  const uint64_t reset_period = (0x09C2 + 2) * 40ull * 1000;
+  ASSERT_EQ(chip.apwr(0x1100, {1, 2, 3, 4}), 1);
+  EXPECT_EQ(chip.esc.next_event_ns(), chip.clock.now_ns() + reset_period);
+  ASSERT_EQ(chip.apwr(reg::kWatchdogDivider, {0x30, 0x00}), 1);
+  ASSERT_EQ(chip.apwr(reg::kWatchdogTimeProcessData, {0x0A, 0x00}), 1);
+  EXPECT_EQ(chip.esc.next_event_ns(), chip.clock.now_ns() + reset_period);  // not retriggered
+  ASSERT_EQ(chip.apwr(0x1100, {1, 2, 3, 4}), 1);
+  const uint64_t period = (0x30 + 2) * 40ull * 10;
+  EXPECT_EQ(chip.esc.next_event_ns(), chip.clock.now_ns() + period);
+  chip.clock.advance(period);
+  chip.esc.service(chip.clock.now_ns());
+  EXPECT_EQ(chip.esc.read8(reg::kWatchdogStatusProcessData) & 0x01, 0x00);
+  ASSERT_EQ(chip.apwr(0x1100, {1, 2, 3, 4}), 1);
+  EXPECT_EQ(chip.esc.read8(reg::kWatchdogStatusProcessData) & 0x01, 0x01);
+  // Time 0 disables it.
+  ASSERT_EQ(chip.apwr(reg::kWatchdogTimeProcessData, {0x00, 0x00}), 1);
+  ASSERT_EQ(chip.apwr(0x1100, {1, 2, 3, 4}), 1);
+  EXPECT_EQ(chip.esc.next_event_ns(), UINT64_MAX);
 }
 
 TEST_F(RegisterTest, EscWriteProtectionCoversAllMemory) {
