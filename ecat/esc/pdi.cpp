@@ -36,6 +36,7 @@
 #include <cstring>
 
 #include "base/little_endian.hpp"
+#include "base/short_copy.hpp"
 #include "ecat/esc/esc.hpp"
 #include "ecat/registers.hpp"
 
@@ -70,7 +71,7 @@ bool Esc::pdi_irq() const {
 void Esc::pdi_read(uint16_t address, uint8_t* dst, uint16_t len) {
   len = static_cast<uint16_t>(std::min<uint32_t>(len, reg::kAddressSpace - address));
   if (len == 0) return;
-  std::memcpy(dst, &mem_[address], len);
+  base::copy_bytes(dst, &mem_[address], len);
   if (address < reg::kProcessRam) pdi_registers_read(address, len);
   pdi_buffer_read_done(address, len);
 }
