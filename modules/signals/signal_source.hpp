@@ -21,7 +21,10 @@ namespace rackcat::modules {
 
 class StateSpacePlant;
 
-class Source {
+// Aligned to 32 bytes: the vtable pointer and the first fields sample() reads (a loopback's
+// output, gain and offset) never straddle two cache lines, so sampling a source costs one line
+// (issue 16: in a line of racks every source is sampled and evicted again each frame).
+class alignas(32) Source {
  public:
   virtual ~Source() = default;
   // The value at t seconds since the rack started. Calls come with non-decreasing t.
@@ -151,8 +154,8 @@ class LoopbackSource final : public Source {
   bool varies_within_cycle() const override { return false; }
 
  private:
-  // What sample() reads next to the vtable pointer, the name last: one cache line per sample
-  // in a line of racks, where the sources of every slave are visited each frame (issue 16).
+  // What sample() reads next to the vtable pointer (the aligned first 32 bytes), the name
+  // last: one cache line per sample in a line of racks (issue 16).
   const double* output_;
   double gain_, offset_;
   std::string name_;
