@@ -57,7 +57,8 @@ void Esc::power_on_reset() {
   sync0_running_ = sync1_running_ = false;
   watchdog_armed_ = false;
   watchdog_running_ = true;
-  derive_configuration();
+  derive_write_protection();
+  derive_watchdog_period();
   reset_sequence_ = 0;
   local_offset_ = options_.power_on_local_time_ns - clock_.now_ns();
 

@@ -254,12 +254,12 @@ class Esc {
   void dc_registers_written(uint16_t address, const uint8_t* src, uint16_t len);
   void before_register_read(uint16_t address, uint16_t len);
   void after_register_read(uint16_t address, uint16_t len);
-  // Registers a cyclic frame consults but a master writes only while it configures the slave:
-  // register and ESC write protection (0x0021/0x0031 bit 0) and the process-data watchdog's
-  // period (divider 0x0400, time 0x0420; ESC datasheet). Derived when they are written and at
-  // reset, so the frame reads them from the ESC object, not from their register lines.
-  void derive_configuration();
-  // write_protection.cpp; this check runs on every write.
+  // Registers a cyclic frame consults but a master writes only while it configures the slave
+  // are derived when they are written and at reset, so the frame reads them from the ESC
+  // object, not from their register lines.
+  // write_protection.cpp: register and ESC write protection (0x0021/0x0031 bit 0).
+  void derive_write_protection();
+  // This check runs on every write.
   bool write_protection_active() const {
     return protection_ != 0 && (((protection_ & kRegisterProtection) && !register_write_enabled_) ||
                                 ((protection_ & kEscProtection) && !esc_write_enabled_));
@@ -422,6 +422,8 @@ class Esc {
   void dc_prepare_system_time_read();
   uint64_t clock_of_system_time(uint64_t system_time) const;
   // watchdog.cpp
+  // The process-data watchdog's period from divider 0x0400 and time 0x0420 (ESC datasheet).
+  void derive_watchdog_period();
   void watchdog_trigger(uint64_t now_ns);
   void watchdog_expired();
   // A timer was armed or moved: lowers the next-event bound (set_next_event_bound).
@@ -445,7 +447,7 @@ class Esc {
   // Port 1 forwards (forwards_to_port1), derived in set_port1_link from the link and DL
   // control 0x0101.
   bool forwards_port1_ = false;
-  // derive_configuration: 0x0021 bit 0 (kRegisterProtection), 0x0031 bit 0 (kEscProtection).
+  // derive_write_protection: 0x0021 bit 0 (kRegisterProtection), 0x0031 bit 0 (kEscProtection).
   static constexpr uint8_t kRegisterProtection = 0x01;
   static constexpr uint8_t kEscProtection = 0x02;
   uint8_t protection_ = 0;
@@ -455,7 +457,7 @@ class Esc {
   // Process-data watchdog deadline (clock time), armed by SM2 writes with trigger enabled.
   bool watchdog_armed_ = false;
   bool watchdog_running_ = true;     // 0x0440 bit 0: not expired
-  uint64_t watchdog_period_ns_ = 0;  // derive_configuration; 0: disabled
+  uint64_t watchdog_period_ns_ = 0;  // derive_watchdog_period; 0: disabled
   uint64_t watchdog_deadline_ = 0;
   uint64_t* next_event_bound_ = nullptr;
   std::array<uint16_t, kFmmus> fmmu_meeting_{};

@@ -136,10 +136,12 @@ void Esc::after_register_write(uint16_t address, const uint8_t* src, uint16_t le
   }
   if (overlaps(address, len, reg::kDlControl, 4)) set_port1_link(port1_link_);
   if (overlaps(address, len, reg::kWriteProtection, 1) ||
-      overlaps(address, len, reg::kEscWriteProtection, 1) ||
-      overlaps(address, len, reg::kWatchdogDivider, 2) ||
+      overlaps(address, len, reg::kEscWriteProtection, 1)) {
+    derive_write_protection();
+  }
+  if (overlaps(address, len, reg::kWatchdogDivider, 2) ||
       overlaps(address, len, reg::kWatchdogTimeProcessData, 2)) {
-    derive_configuration();
+    derive_watchdog_period();
   }
   if (overlaps(address, len, reg::kAlControl, 1)) {
     // AL control event (0x0220 bit 0, ESC datasheet): cleared when the PDI reads 0x0120.

@@ -8,6 +8,12 @@
 
 namespace rackcat::ecat {
 
+void Esc::derive_watchdog_period() {
+  // One watchdog tick is (divider + 2) x 40 ns (25 MHz); the reset values give 100 µs x 1000.
+  const uint64_t tick = (static_cast<uint64_t>(le::get16(&mem_[reg::kWatchdogDivider])) + 2) * 40;
+  watchdog_period_ns_ = tick * le::get16(&mem_[reg::kWatchdogTimeProcessData]);
+}
+
 void Esc::watchdog_trigger(uint64_t now_ns) {
   if (!watchdog_running_) {
     watchdog_running_ = true;

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cstring>
 
-#include "base/little_endian.hpp"
 #include "ecat/esc/esc.hpp"
 #include "ecat/registers.hpp"
 
@@ -17,13 +16,10 @@ namespace {
 constexpr uint16_t kUserRam = 0x0F80;
 }
 
-void Esc::derive_configuration() {
+void Esc::derive_write_protection() {
   protection_ =
       static_cast<uint8_t>(((mem_[reg::kWriteProtection] & 0x01) ? kRegisterProtection : 0) |
                            ((mem_[reg::kEscWriteProtection] & 0x01) ? kEscProtection : 0));
-  // One watchdog tick is (divider + 2) x 40 ns (25 MHz); the reset values give 100 µs x 1000.
-  const uint64_t tick = (static_cast<uint64_t>(le::get16(&mem_[reg::kWatchdogDivider])) + 2) * 40;
-  watchdog_period_ns_ = tick * le::get16(&mem_[reg::kWatchdogTimeProcessData]);
 }
 
 bool Esc::write_allowed(uint32_t address) const {
