@@ -69,6 +69,9 @@ ChannelDiagnostics::ChannelDiagnostics(mdp::Device& device,
       inputs_(drivers.size()),
       outputs_(drivers.size()),
       uart_errors_(drivers.size()) {
+  // Every module can be watched (watch_outputs): an output-fault injection on the device thread
+  // then inserts without allocating.
+  watched_.reserve(drivers.size());
   for (size_t i = 0; i < drivers.size(); ++i) {
     uarts_[i] = dynamic_cast<UartDriver*>(drivers[i].get());
     input_causes_[i] =

@@ -41,8 +41,8 @@ class ChannelDiagnostics {
     }
   }
   // An output fault (overload / overtemperature) was injected on module index i: its output
-  // channels are evaluated from now on (without one they have no cause to report). Throws
-  // std::out_of_range for an index without a module.
+  // channels are evaluated from now on (without one they have no cause to report). No
+  // allocation (device thread). Throws std::out_of_range for an index without a module.
   void watch_outputs(size_t module_index);
   // Forget what was reported (0xFBF0 device reset: the history is empty again); the next
   // evaluate() reports what is still active.

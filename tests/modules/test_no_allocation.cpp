@@ -55,6 +55,27 @@ TEST_F(RackTest, CyclicPathAllocatesNothing) {
   EXPECT_NE(module_obj(at(1, 12), 0x6000, 0x2).get_u(1), 0u);
 }
 
+// A `ctl` output-fault injection runs on the device thread: watching a module's outputs from
+// then on must not allocate either, whichever module is the first (or the last) to get one.
+TEST_F(RackTest, OutputFaultInjectionAllocatesNothing) {
+  if (!rackcat::testing::CountAllocations::available()) GTEST_SKIP() << "operator new is ASan's";
+  to_op();
+  cycle();
+  drain_emergencies();
+  std::vector<uint16_t> with_outputs;
+  for (uint16_t m = 1; rack.driver(m) != nullptr; ++m) {
+    if (!rack.driver(m)->outputs().empty()) with_outputs.push_back(m);
+  }
+  ASSERT_GT(with_outputs.size(), 1u);
+  std::optional<rackcat::testing::CountAllocations> count(std::in_place);
+  for (const uint16_t m : with_outputs) rack.set_output_fault(m, 0, true, false);
+  const size_t allocations = count->allocations();
+  count.reset();
+  EXPECT_EQ(allocations, 0u);
+  cycle();
+  EXPECT_FALSE(drain_emergencies().empty());  // the injected overloads are reported
+}
+
 // The whole device path a frame takes: SM2 bytes through the process image into
 // the objects and the drivers, then the drivers, the input latch times (0xF6F0/0xF6F2) and the
 // process image back into SM3 bytes - with the entry descriptions shared with a second device
