@@ -9,12 +9,28 @@ using namespace rackcat;
 using namespace rackcat::modules;
 using namespace rackcat::modules::testing;
 
-TEST_F(RackTest, RepeatedOutputsAfterASafeStateAreDrivenAgain) {
-  CardDriver& dout = at(2, 7);
-  CardDriver& din = at(2, 8);  // channels 0,1 looped from slot 7
-  to_op();
-  module_obj(dout, 0x7000, 0x0).set_u(1, 0x3);
-  cycle();
+namespace {
+
+class CyclicShortcutTest : public RackTest {
+ protected:
+  struct LoopedPair {
+    CardDriver& dout;  // RIM 2 slot 7
+    CardDriver& din;   // RIM 2 slot 8, channels 0,1 looped from slot 7
+  };
+  // The looped cards in OP after one cycle with `word` as the output card's data.
+  LoopedPair looped_pair_in_op(uint64_t word) {
+    LoopedPair p{at(2, 7), at(2, 8)};
+    to_op();
+    module_obj(p.dout, 0x7000, 0x0).set_u(1, word);
+    cycle();
+    return p;
+  }
+};
+
+}  // namespace
+
+TEST_F(CyclicShortcutTest, RepeatedOutputsAfterASafeStateAreDrivenAgain) {
+  auto [dout, din] = looped_pair_in_op(0x3);
   cycle();  // same output data: the shortcut
   EXPECT_EQ(dout.outputs()[1].driven, 1.0);
   EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x3u);
@@ -31,12 +47,8 @@ TEST_F(RackTest, RepeatedOutputsAfterASafeStateAreDrivenAgain) {
   EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x3u);
 }
 
-TEST_F(RackTest, WiringFaultBetweenRepeatedOutputsReachesTheLoopback) {
-  CardDriver& dout = at(2, 7);
-  CardDriver& din = at(2, 8);
-  to_op();
-  module_obj(dout, 0x7000, 0x0).set_u(1, 0x3);
-  cycle();
+TEST_F(CyclicShortcutTest, WiringFaultBetweenRepeatedOutputsReachesTheLoopback) {
+  auto [dout, din] = looped_pair_in_op(0x3);
   EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x3u);
   // A short to ground (a safe wiring fault, guide §4.7): the wire reads 0 although driven.
   rack.set_wiring_fault(dout.module().number, 0, WiringFault::ShortToGround);
@@ -49,12 +61,8 @@ TEST_F(RackTest, WiringFaultBetweenRepeatedOutputsReachesTheLoopback) {
   EXPECT_EQ(dout.outputs()[0].wire, 1.0);
 }
 
-TEST_F(RackTest, SubstituteCodesGiveWayToTheSameInputsAfterTheRimReturns) {
-  CardDriver& dout = at(2, 7);
-  CardDriver& din = at(2, 8);
-  to_op();
-  module_obj(dout, 0x7000, 0x0).set_u(1, 0x3);
-  cycle();
+TEST_F(CyclicShortcutTest, SubstituteCodesGiveWayToTheSameInputsAfterTheRimReturns) {
+  auto [dout, din] = looped_pair_in_op(0x3);
   const auto before = module_obj(din, 0x6000, 0x0).get_u(1);
   ASSERT_EQ(before & 0x3u, 0x3u);
   ASSERT_EQ(din.inputs()[0].code, 1u);
@@ -70,12 +78,8 @@ TEST_F(RackTest, SubstituteCodesGiveWayToTheSameInputsAfterTheRimReturns) {
   EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1), before);
 }
 
-TEST_F(RackTest, AnOfflineRimIsLeftOutOfTheCycleUntilItReturns) {
-  CardDriver& dout = at(2, 7);
-  CardDriver& din = at(2, 8);  // channels 0,1 looped from slot 7
-  to_op();
-  module_obj(dout, 0x7000, 0x0).set_u(1, 0x1);
-  cycle();
+TEST_F(CyclicShortcutTest, AnOfflineRimIsLeftOutOfTheCycleUntilItReturns) {
+  auto [dout, din] = looped_pair_in_op(0x1);
   ASSERT_EQ(dout.outputs()[0].driven, 1.0);
   rack.set_rim_state(2, RimState::Offline);
   // New output data while the RIM is offline is not driven, and its inputs read 0.
