@@ -23,9 +23,14 @@ void Esc::watchdog_trigger(uint64_t now_ns) {
     watchdog_armed_ = false;
     return;
   }
+  const uint64_t deadline = now_ns + watchdog_period_ns_;
+  // The next-event bound (set_next_event_bound) is at or before the armed deadline; a
+  // retrigger that moves it later leaves the bound valid, so only a newly armed or earlier
+  // deadline looks at the other timers (the SYNC units' state is not on the cyclic lines).
+  const bool earlier = !watchdog_armed_ || deadline < watchdog_deadline_;
   watchdog_armed_ = true;
-  watchdog_deadline_ = now_ns + watchdog_period_ns_;
-  timers_changed();
+  watchdog_deadline_ = deadline;
+  if (earlier) timers_changed();
 }
 
 void Esc::watchdog_expired() {

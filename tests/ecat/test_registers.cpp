@@ -156,6 +156,35 @@ TEST(WatchdogRegisters, PeriodAndStatusFollowTheRegisters) {
   EXPECT_EQ(chip.esc.next_event_ns(), UINT64_MAX);
 }
 
+// The next-event bound a segment keeps (Esc::set_next_event_bound) is lowered by a newly armed
+// watchdog and by a retrigger that moves the deadline earlier (a shorter period); a retrigger
+// that moves it later leaves the bound early, never late.
+TEST(WatchdogRegisters, ArmingLowersTheNextEventBound) {
+  ChipMaster chip;
+  uint64_t bound = UINT64_MAX;
+  chip.esc.set_next_event_bound(&bound);
+  chip.sm(2, 0x1100, 4, 0x64);  // buffered, ECAT writes, AL event, watchdog trigger
+  const uint64_t reset_period = (0x09C2 + 2) * 40ull * 1000;
+  const uint64_t armed_at = chip.clock.now_ns();
+  ASSERT_EQ(chip.apwr(0x1100, {1, 2, 3, 4}), 1);
+  EXPECT_EQ(bound, armed_at + reset_period);
+  chip.clock.advance(1'000'000);
+  ASSERT_EQ(chip.apwr(0x1100, {1, 2, 3, 4}), 1);  // later deadline: the bound stays early
+  EXPECT_EQ(bound, armed_at + reset_period);
+  EXPECT_LE(bound, chip.esc.next_event_ns());
+  ASSERT_EQ(chip.apwr(reg::kWatchdogTimeProcessData, {0x0A, 0x00}), 1);
+  ASSERT_EQ(chip.apwr(0x1100, {1, 2, 3, 4}), 1);  // earlier deadline: lowered
+  EXPECT_EQ(bound, chip.clock.now_ns() + (0x09C2 + 2) * 40ull * 10);
+  EXPECT_EQ(bound, chip.esc.next_event_ns());
+  chip.clock.advance(1'000'000);
+  chip.esc.service(chip.clock.now_ns());  // expired: disarmed
+  EXPECT_EQ(chip.esc.next_event_ns(), UINT64_MAX);
+  bound = UINT64_MAX;                             // what the segment's service() computes then
+  ASSERT_EQ(chip.apwr(0x1100, {1, 2, 3, 4}), 1);  // armed again
+  EXPECT_EQ(bound, chip.esc.next_event_ns());
+  EXPECT_LT(bound, UINT64_MAX);
+}
+
 TEST_F(RegisterTest, EscWriteProtectionCoversAllMemory) {
   EXPECT_EQ(line.master->fpwr8(kStation, 0x0031, 0x01), 1);
   EXPECT_EQ(line.master->fpwr8(kStation, 0x8000, 0x77), 0);
