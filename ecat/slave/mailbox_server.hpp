@@ -87,11 +87,13 @@ class MailboxServer {
   void send(size_t length);
   void serve_repeat();
 
+  // running_ first: the firmware asks for it on every cyclic frame (Firmware::wants_service),
+  // the rest only when the mailbox has work.
+  bool running_ = false;
   PdiPort& pdi_;
   EsmObserver* observer_ = nullptr;
   std::array<Entry, kMaxProtocols> protocols_{};
   size_t protocol_count_ = 0;
-  bool running_ = false;
   uint16_t in_start_ = 0, in_length_ = 0, out_start_ = 0, out_length_ = 0;
 
   std::vector<uint8_t> request_;  // SM0 as read
