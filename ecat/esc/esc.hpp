@@ -77,12 +77,13 @@ class Esc {
     pass_ = times;
     register_write_enabled_ = esc_write_enabled_ = false;  // enables last one frame
   }
-  // A hint, no effect on behaviour: starts loading the state a cyclic datagram touches first
-  // (FMMUs, SyncManagers, the event and SM registers) while the segment is still busy with the
-  // slave before this one, so a long line does not wait for each ESC's memory in turn.
+  // A hint, no effect on behaviour: starts loading the state a cyclic datagram touches (the hot
+  // block: flags, whole-buffer plan, SyncManagers; the event and SM registers) while the segment is
+  // still busy with the slave before this one, so a long line does not wait for each ESC's memory
+  // in turn.
   void prefetch() const {
-    __builtin_prefetch(&fmmu_[0]);
-    __builtin_prefetch(&fmmu_[2]);
+    __builtin_prefetch(&pass_);
+    __builtin_prefetch(&whole_plan_);
     __builtin_prefetch(&sm_[0]);
     __builtin_prefetch(&mem_[reg::kEcatEventRequest]);
     __builtin_prefetch(&mem_[reg::kSm]);
@@ -326,21 +327,28 @@ class Esc {
     }
     bool meets(const FmmuSide& other) const { return first < other.end && other.first < end; }
   };
-  // Copies the incoming bytes the writes take aside (scratch_, at the same offsets) and
-  // returns where the writes find them.
-  const uint8_t* keep_incoming(const uint8_t* data, const FmmuSide& writes);
+  // Copies the incoming bytes [first, end) the writes take aside (scratch_, at the same
+  // offsets) and returns where the writes find them.
+  const uint8_t* keep_incoming(const uint8_t* data, uint32_t first, uint32_t end);
   // What process_whole_fmmus works out for a datagram from the FMMU configuration alone, kept
-  // for the last one (the cyclic frame repeats it) until an FMMU or SM is (re)loaded.
+  // for the last one (the cyclic frame repeats it) until an FMMU or SM is (re)loaded: with each
+  // FMMU's place in the datagram, so serving it reads no FMMU state. A datagram's bytes fit
+  // 16 bits (its length field, ETG.1000.4 §5.4).
   struct WholePlan {
-    bool valid = false;
     uint32_t address = 0;
     uint16_t len = 0;
     uint16_t fmmus = 0;
     uint8_t usable = 0;
-    bool whole = false;          // every FMMU the datagram meets is whole and completely covered
-    bool keep_incoming = false;  // the reads fill bytes the writes take
-    FmmuSide reads{};
-    FmmuSide writes{};
+    bool valid = false;
+    bool whole = false;           // every FMMU the datagram meets is whole and completely covered
+    bool keep_incoming = false;   // the reads fill bytes the writes take
+    uint16_t reads = 0;           // the FMMUs read through (bit n = FMMU n)
+    uint16_t writes = 0;          // ... and written through
+    uint16_t incoming_first = 0;  // the datagram bytes the writes take, [first, end)
+    uint16_t incoming_end = 0;
+    // FMMU n's first byte in the datagram's data (its logical start - the datagram's address),
+    // for n in reads | writes.
+    std::array<uint16_t, kFmmus> offset{};
   };
   void plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus);
   bool whole_fmmu_read(int index, uint8_t* dst);
@@ -429,17 +437,19 @@ class Esc {
   // A timer was armed or moved: lowers the next-event bound (set_next_event_bound).
   void timers_changed();
 
-  SiiEeprom& eeprom_;
-  const Clock& clock_;
   // What every cyclic frame and the firmware's process-data round touch comes first, on as few
-  // cache lines as it fits (at 199 slaves each line is a miss again every frame): the memory,
-  // the pass times, the masks and flags of the datagram and PDI paths, the watchdog, the
-  // whole-buffer plan, then the SyncManagers and the FMMUs.
-  EscMemory mem_;  // registers and process RAM, resident as far as used (esc_memory.hpp)
+  // cache lines as it fits (at 199 slaves each line is a miss again every frame), from a line
+  // boundary: the memory, the pass times, the watchdog, the masks and flags of the datagram and
+  // PDI paths (one line), the whole-buffer plan and the FMMUs' SyncManagers (the next), then the
+  // SyncManagers (SM0-SM3 on the third line). The FMMUs, the next-event bound and the
+  // configuration-time state follow.
+  alignas(64) EscMemory mem_;  // registers and process RAM, resident as far as used
   PassTimes pass_{};
-  uint16_t sm_enabled_mask_ = 0;
-  uint16_t sm_alone_mask_ = 0;  // bit n: SM n enabled, no other enabled SM shares a byte
+  uint64_t watchdog_period_ns_ = 0;  // derive_watchdog_period; 0: disabled
+  uint64_t watchdog_deadline_ = 0;   // clock time, armed by SM2 writes with trigger enabled
   uint32_t sm_first_byte_ = reg::kAddressSpace;  // lowest start of an enabled SM's buffer
+  uint16_t sm_enabled_mask_ = 0;
+  uint16_t sm_alone_mask_ = 0;     // bit n: SM n enabled, no other enabled SM shares a byte
   uint16_t fmmu_active_mask_ = 0;  // bit n: FMMU n activated with a read or write type
   uint16_t fmmu_meeting_known_ = 0;
   uint16_t fmmu_whole_mask_ = 0;
@@ -454,17 +464,16 @@ class Esc {
   bool register_write_enabled_ = false;  // 0x0020 bit 0 written in the current frame
   bool esc_write_enabled_ = false;       // 0x0030 bit 0 written in the current frame
   bool reset_signal_ = true;             // raised by every reset until take_reset()
-  // Process-data watchdog deadline (clock time), armed by SM2 writes with trigger enabled.
-  bool watchdog_armed_ = false;
-  bool watchdog_running_ = true;     // 0x0440 bit 0: not expired
-  uint64_t watchdog_period_ns_ = 0;  // derive_watchdog_period; 0: disabled
-  uint64_t watchdog_deadline_ = 0;
-  uint64_t* next_event_bound_ = nullptr;
-  std::array<uint16_t, kFmmus> fmmu_meeting_{};
+  bool watchdog_armed_ = false;          // the process-data watchdog's deadline is set
+  bool watchdog_running_ = true;         // 0x0440 bit 0: not expired
   WholePlan whole_plan_{};
+  std::array<uint16_t, kFmmus> fmmu_meeting_{};
   std::array<SmState, kSyncManagers> sm_{};
   std::array<FmmuState, kFmmus> fmmu_{};
+  uint64_t* next_event_bound_ = nullptr;
 
+  SiiEeprom& eeprom_;
+  const Clock& clock_;
   EscOptions options_;
   std::vector<uint8_t> sii_;
   std::array<uint8_t, kSyncManagers> activate_seen_{};  // 0x0806+8n at the last reload

@@ -183,7 +183,8 @@ uint8_t Esc::walk_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* 
     if ((use & 0x02) != 0) writes.add(index, first, end);
   }
   if ((reads.fmmus | writes.fmmus) == 0) return 0;
-  const uint8_t* incoming = reads.meets(writes) ? keep_incoming(data, writes) : data;
+  const uint8_t* incoming =
+      reads.meets(writes) ? keep_incoming(data, writes.first, writes.end) : data;
 
   bool read_done = false;
   bool write_done = false;
@@ -198,15 +199,17 @@ uint8_t Esc::walk_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* 
   return (read_done || write_done) ? 1 : 0;
 }
 
-const uint8_t* Esc::keep_incoming(const uint8_t* data, const FmmuSide& writes) {
-  std::memcpy(scratch_.data() + writes.first, data + writes.first, writes.end - writes.first);
+const uint8_t* Esc::keep_incoming(const uint8_t* data, uint32_t first, uint32_t end) {
+  std::memcpy(scratch_.data() + first, data + first, end - first);
   return scratch_.data();
 }
 
 void Esc::plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus) {
   WholePlan& p = whole_plan_;
-  p = WholePlan{true, address, len, fmmus, usable};
+  p = WholePlan{address, len, fmmus, usable, true};
   const uint64_t dg_end = static_cast<uint64_t>(address) + len;
+  FmmuSide reads;
+  FmmuSide writes;
   for (uint16_t m = fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const int index = std::countr_zero(m);
     const FmmuState& f = fmmu_[index];
@@ -215,17 +218,21 @@ void Esc::plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint1
     const uint64_t lo = f.logical_start;
     const uint64_t end = lo + f.length;
     if (end <= address || lo >= dg_end) continue;  // does not meet the datagram
-    if ((fmmu_whole_mask_ & (1u << index)) == 0 || lo < address || end > dg_end) {
-      p.reads = p.writes = FmmuSide{};
-      return;  // the bit-wise walk
-    }
+    if ((fmmu_whole_mask_ & (1u << index)) == 0 || lo < address || end > dg_end) return;
     const auto first = static_cast<uint32_t>(lo - address);
     const auto last_end = static_cast<uint32_t>(end - address);
-    if ((use & 0x01) != 0) p.reads.add(index, first, last_end);
-    if ((use & 0x02) != 0) p.writes.add(index, first, last_end);
+    if ((use & 0x01) != 0) reads.add(index, first, last_end);
+    if ((use & 0x02) != 0) writes.add(index, first, last_end);
+    p.offset[static_cast<size_t>(index)] = static_cast<uint16_t>(first);
   }
   p.whole = true;
-  p.keep_incoming = p.reads.meets(p.writes);
+  p.reads = reads.fmmus;
+  p.writes = writes.fmmus;
+  p.keep_incoming = reads.meets(writes);
+  if (p.keep_incoming) {
+    p.incoming_first = static_cast<uint16_t>(writes.first);
+    p.incoming_end = static_cast<uint16_t>(writes.end);
+  }
 }
 
 int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data,
@@ -235,17 +242,18 @@ int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint
     plan_whole_fmmus(usable, address, len, fmmus);
   }
   if (!p.whole) return -1;
-  if ((p.reads.fmmus | p.writes.fmmus) == 0) return 0;
-  const uint8_t* incoming = p.keep_incoming ? keep_incoming(data, p.writes) : data;
+  if ((p.reads | p.writes) == 0) return 0;
+  const uint8_t* incoming =
+      p.keep_incoming ? keep_incoming(data, p.incoming_first, p.incoming_end) : data;
   bool read_done = false;
   bool write_done = false;
-  for (uint16_t m = p.reads.fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+  for (uint16_t m = p.reads; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const int index = std::countr_zero(m);
-    read_done |= whole_fmmu_read(index, data + (fmmu_[index].logical_start - address));
+    read_done |= whole_fmmu_read(index, data + p.offset[static_cast<size_t>(index)]);
   }
-  for (uint16_t m = p.writes.fmmus; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
+  for (uint16_t m = p.writes; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {
     const int index = std::countr_zero(m);
-    write_done |= whole_fmmu_write(index, incoming + (fmmu_[index].logical_start - address));
+    write_done |= whole_fmmu_write(index, incoming + p.offset[static_cast<size_t>(index)]);
   }
   if (cmd == Command::Lrw) return (read_done ? 1 : 0) + (write_done ? 2 : 0);
   return (read_done || write_done) ? 1 : 0;
