@@ -20,6 +20,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "base/esm_state.hpp"
@@ -133,9 +134,12 @@ class Firmware {
   bool dc_synchronised_ = false;  // SYNC0 was running when SAFEOP was entered
   EsmState state_ = EsmState::Init;
   std::array<Sm, 4> sm_taken_{};  // SM0-SM3 as checked when the current state was entered
-  std::vector<uint8_t> outputs_;  // SM2 as last read (sized on PREOP -> SAFEOP)
-  std::vector<uint8_t> inputs_;   // SM3 image the device fills
+  std::span<uint8_t> outputs_;    // SM2 as last read, in images_
+  std::span<uint8_t> inputs_;     // SM3 image the device fills, in images_
   MailboxServer mailbox_;
+  // The outputs, then the inputs: one allocation (sized on PREOP -> SAFEOP), so a small device's
+  // two images share a cache line.
+  std::vector<uint8_t> images_;
 
   EsmObserver* observer_ = nullptr;
   bool error_ = false;

@@ -10,6 +10,8 @@
 //     to the safe state and the ESM falls to SAFEOP with 0x001B (ETG.1000.6 Table 11).
 // Buffers are sized on PREOP -> SAFEOP; the cyclic path does not allocate.
 #include <algorithm>
+#include <cstddef>
+#include <span>
 
 #include "ecat/al_status_code.hpp"
 #include "ecat/registers.hpp"
@@ -18,8 +20,11 @@
 namespace rackcat::ecat {
 
 void Firmware::pd_start() {
-  outputs_.assign(sm_[2].enabled ? sm_[2].length : 0, 0);
-  inputs_.assign(sm_[3].enabled ? sm_[3].length : 0, 0);
+  const size_t outputs = sm_[2].enabled ? sm_[2].length : 0;
+  const size_t inputs = sm_[3].enabled ? sm_[3].length : 0;
+  images_.assign(outputs + inputs, 0);
+  outputs_ = std::span<uint8_t>(images_).first(outputs);
+  inputs_ = std::span<uint8_t>(images_).subspan(outputs, inputs);
   set_sm_deactivated(2, false);
   set_sm_deactivated(3, false);
   // The master's first read in SAFEOP finds valid inputs.
