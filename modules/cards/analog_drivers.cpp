@@ -55,16 +55,16 @@ class AnalogInputDriver final : public CardDriver {
     for (size_t i = 0; i < inputs_.size(); ++i) {
       InputChannel& in = inputs_[i];
       if (samples_ == 1) {
-        in.value = in.source->sample(t);
+        in.value = sample(i, t);
         in.code = scale_.to_code(in.value);
         slots_[i].set(in.code);
         continue;
       }
       // Sample k at t - dt + (k+1) dt/8; element 0 is the oldest.
-      const bool varies = in.source->varies_within_cycle();
+      const bool varies = source(i).varies_within_cycle();
       for (unsigned k = 0; k < samples_; ++k) {
         if (varies || k == 0) {
-          in.value = in.source->sample(varies ? t - dt + (k + 1) * dt / samples_ : t);
+          in.value = sample(i, varies ? t - dt + (k + 1) * dt / samples_ : t);
           in.code = scale_.to_code(in.value);
         }
         raw_[i][2 * k] = static_cast<uint8_t>(in.code);

@@ -1,6 +1,7 @@
 #include "modules/cards/card_driver.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "modules/cards/drivers.hpp"
 #include "modules/cards/substitute.hpp"
@@ -9,8 +10,13 @@ namespace rackcat::modules {
 
 CardDriver::CardDriver(const mdp::Module& module, coe::ObjectDictionary& od, size_t inputs,
                        size_t outputs)
-    : inputs_(inputs), outputs_(outputs), module_(module), od_(od) {
-  for (auto& in : inputs_) in.source = std::make_unique<ConstantSource>(0.0);
+    : inputs_(inputs),
+      affine_(inputs),
+      outputs_(outputs),
+      sources_(inputs),
+      module_(module),
+      od_(od) {
+  for (size_t i = 0; i < inputs; ++i) set_source(i, std::make_unique<ConstantSource>(0.0));
   namespace sv = mdp::substitute;
   output_reaction_ = object(0x4000, sv::kOutputReaction);
   input_reaction_ = object(0x4000, sv::kInputReaction);
@@ -49,6 +55,14 @@ void CardDriver::substitute_inputs(bool rim_offline) {
     put_input_code(i, in.code);
   }
   input_status_slot_.set(status);
+}
+
+void CardDriver::set_source(size_t i, std::unique_ptr<Source> source) {
+  if (source == nullptr) throw std::invalid_argument("no source");
+  affine_.at(i) = source->affine();
+  sources_.at(i) = std::move(source);
+  sources_vary_ = std::any_of(sources_.begin(), sources_.end(),
+                              [](const auto& s) { return s && s->varies_within_cycle(); });
 }
 
 coe::Object* CardDriver::object(uint16_t area_base, uint8_t nibble) {

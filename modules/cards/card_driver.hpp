@@ -30,13 +30,14 @@ enum class WiringFault : uint8_t {
   ShortToSupply,  // the wire reads 1 whatever is driven: driven low -> unsafe wiring fault
 };
 
+// What a cycle reads and writes of an input channel (32 bytes: two channels per cache line);
+// its source is the driver's (CardDriver::source / set_source).
 struct InputChannel {
-  std::unique_ptr<Source> source;  // never null
-  double value = 0.0;              // last sample (V, °C or 0/1)
-  uint32_t code = 0;               // last code written to the process data
-  bool open = false;               // thermocouple / RTD sensor break (fault injection)
-  double loop_ohms = 10.0;         // thermocouple loop resistance reported in 0x5nn4
-  uint32_t last_valid = 0;         // last code from a present source (substitute "hold last")
+  double value = 0.0;       // last sample (V, °C or 0/1)
+  uint32_t code = 0;        // last code written to the process data
+  uint32_t last_valid = 0;  // last code from a present source (substitute "hold last")
+  double loop_ohms = 10.0;  // thermocouple loop resistance reported in 0x5nn4
+  bool open = false;        // thermocouple / RTD sensor break (fault injection)
 };
 
 struct OutputChannel {
@@ -62,6 +63,11 @@ class CardDriver {
   std::span<const InputChannel> inputs() const { return inputs_; }
   std::span<OutputChannel> outputs() { return outputs_; }
   std::span<const OutputChannel> outputs() const { return outputs_; }
+  // Input i's signal source (never null).
+  const Source& source(size_t i) const { return *sources_[i]; }
+  // Input i samples `source` (not null) from the next cycle on. Rack file, control API, RIM
+  // links: never the cyclic path.
+  void set_source(size_t i, std::unique_ptr<Source> source);
 
   // OP, valid output data: take the 0x7nnX values and drive them.
   virtual void read_outputs() {}
@@ -133,11 +139,21 @@ class CardDriver {
   }
   // Puts `code` as input i's process-data value (every sample of an oversampled card).
   virtual void put_input_code(size_t /*i*/, uint32_t /*code*/) {}
+  // Input i's source at t: an affine source from the driver's own copy of its three values,
+  // any other through sample() (inline: every input, every cycle).
+  double sample(size_t i, double t) {
+    const Source::Affine& a = affine_[i];
+    return a.x != nullptr ? a.gain * *a.x + a.offset : sources_[i]->sample(t);
+  }
+  // Whether any input's source varies within a cycle (Source::varies_within_cycle), kept by
+  // set_source.
+  bool sources_vary() const { return sources_vary_; }
 
   // What every cycle reads comes first, the set-up references last (issue 16: a line of racks
   // is bound by the cache lines each driver's round touches; a derived driver's own per-cycle
   // fields follow these).
   std::vector<InputChannel> inputs_;
+  std::vector<Source::Affine> affine_;  // per input: its source's affine(), kept by set_source
   std::vector<OutputChannel> outputs_;
   coe::Object* input_reaction_ = nullptr;  // 0x4nnA
   // Cyclic path: the channels 0x4nnA has entries for, and 0x4nnC's value slot.
@@ -148,6 +164,8 @@ class CardDriver {
   uint64_t drive_epoch_ = 1;  // counts drive() calls
   uint64_t taken_epoch_ = 0;  // drive_epoch_ at outputs_taken() (0: never)
   uint32_t taken_word_ = 0;
+  bool sources_vary_ = false;
+  std::vector<std::unique_ptr<Source>> sources_;  // per input, never null
 
  protected:
   coe::Object* output_reaction_ = nullptr;  // 0x4nn8

@@ -60,8 +60,7 @@ class DigitalInputDriver final : public CardDriver {
     }
     // Sample k of 0..7 at t - dt + (k+1) dt/8: sample 0 is the oldest, 7 is taken now.
     // Channels whose sources cannot change within a cycle are sampled once.
-    bool varies = false;
-    for (const auto& in : inputs_) varies |= in.source->varies_within_cycle();
+    const bool varies = sources_vary();
     uint32_t word = 0;
     for (unsigned k = 0; k < samples_; ++k) {
       const double ts = t - dt + (k + 1) * dt / samples_;
@@ -107,7 +106,7 @@ class DigitalInputDriver final : public CardDriver {
     const size_t n = inputs_.size();
     for (size_t i = 0; i < n; ++i) {
       InputChannel& in = channels[i];
-      in.value = in.source->sample(t);
+      in.value = sample(i, t);
       // Inverted cards report a low input as 1 (guide Table 3 0x9000).
       if (level(in.value) != inverted_) word |= 1u << i;
     }
@@ -263,7 +262,7 @@ class DioDriver final : public CardDriver {
     uint32_t word = 0;
     for (size_t i = 0; i < inputs_.size(); ++i) {
       InputChannel& in = inputs_[i];
-      in.value = in.source->sample(t);
+      in.value = sample(i, t);
       in.code = level(in.value) ? 1u : 0u;
       word |= in.code << i;
     }

@@ -181,7 +181,7 @@ void EncoderDriver::update_error() {
 
 void EncoderDriver::write_inputs(double t, double /*dt*/) {
   InputChannel& ch = inputs_[0];
-  ch.value = ch.source->sample(t);
+  ch.value = sample(0, t);
   int64_t raw = encoder::steps_of(hw_, ch.value);
   if (faults_ & bit(EncoderFault::Jump)) raw += jump_steps_;
   if (faults_ & bit(EncoderFault::Frozen)) raw = frozen_at_;

@@ -42,7 +42,7 @@ class ThermocoupleDriver final : public CardDriver {
   void write_inputs(double t, double) override {
     for (size_t i = 0; i < inputs_.size(); ++i) {
       InputChannel& in = inputs_[i];
-      in.value = in.source->sample(t);
+      in.value = sample(i, t);
       // The conversion is a pure function of (temperature, cold junction, open): skip the
       // polynomials while neither changed.
       Cache& c = cache_[i];
@@ -109,7 +109,7 @@ class RtdDriver final : public CardDriver {
   void write_inputs(double t, double) override {
     for (size_t i = 0; i < inputs_.size(); ++i) {
       InputChannel& in = inputs_[i];
-      in.value = in.source->sample(t);
+      in.value = sample(i, t);
       int16_t code = kTempOpenCircuit;
       if (!in.open) {
         // The card measures the element's resistance and linearises it (Callendar-Van Dusen).

@@ -116,7 +116,7 @@ json module_json(Rack& rack, const CardDriver& d) {
            {"value", finite_or_zero(in.value)},
            {"unit", d.input_unit()},
            {"code", in.code},
-           {"source", in.source->describe()}};
+           {"source", d.source(i).describe()}};
     if (d.has_sensor_break()) c["open"] = in.open;
     if (d.card().thermocouple_ohms) c["loop_ohms"] = in.loop_ohms;
     inputs.push_back(std::move(c));

@@ -621,7 +621,7 @@ void Rack::set_source(uint16_t module, size_t channel, std::string_view kind,
   }
   if (ohms) set_loop_ohms(module, channel, *ohms);
   if (open) d->inputs()[channel].open = *open;
-  d->inputs()[channel].source = std::move(s);
+  d->set_source(channel, std::move(s));
   log_fault(base::FaultWhat::Source, module, channel, 0, kind);
 }
 

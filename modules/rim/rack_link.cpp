@@ -17,9 +17,9 @@ void attach_rim_master(RimMaster& master, Rack& rack) {
         throw std::invalid_argument(
             fmt::format("rack has no input channel {} in RIM {} slot {}", c.channel, r, c.slot));
       }
-      d->inputs()[c.channel].source = std::make_unique<RemoteInputSource>(
-          master.input_ptr(r, c.slot, c.channel),
-          fmt::format("rim{}.slot{}.in{}", r, c.slot, c.channel));
+      d->set_source(c.channel, std::make_unique<RemoteInputSource>(
+                                   master.input_ptr(r, c.slot, c.channel),
+                                   fmt::format("rim{}.slot{}.in{}", r, c.slot, c.channel)));
     }
     for (const RimChannel& c : p.outputs) {
       CardDriver* d = rack.driver_at(r, c.slot);

@@ -45,8 +45,9 @@ ThreadedRimLink::ThreadedRimLink(Rack& rack, std::unique_ptr<CanBus> bus, RimMas
     }
     inputs_[i].store(0.0);
     master_inputs_.push_back(master_->input_ptr(c.rim, c.slot, c.channel));
-    d->inputs()[c.channel].source = std::make_unique<AtomicInputSource>(
-        &inputs_[i], fmt::format("rim{}.slot{}.in{}", c.rim, c.slot, c.channel));
+    d->set_source(c.channel,
+                  std::make_unique<AtomicInputSource>(
+                      &inputs_[i], fmt::format("rim{}.slot{}.in{}", c.rim, c.slot, c.channel)));
   }
   for (size_t i = 0; i < out_channels_.size(); ++i) {
     const Channel& c = out_channels_[i];

@@ -63,7 +63,7 @@ TEST_F(ControlApiTest, SetsAChannelValueOrSource) {
 
 TEST_F(ControlApiTest, InvalidRequestsGetAReasonAndChangeNothing) {
   const uint16_t n = at(1, 12).module().number;
-  const std::string before = at(1, 12).inputs()[0].source->describe();
+  const std::string before = at(1, 12).source(0).describe();
   struct Case {
     const char* method;
     const char* path;
@@ -142,7 +142,7 @@ TEST_F(ControlApiTest, InvalidRequestsGetAReasonAndChangeNothing) {
   EXPECT_NO_THROW((void)odd.body.dump());
   auto bad_json = api.handle("POST", "/api/channel", "{not json");
   EXPECT_EQ(bad_json.status, 400);
-  EXPECT_EQ(at(1, 12).inputs()[0].source->describe(), before);
+  EXPECT_EQ(at(1, 12).source(0).describe(), before);
   EXPECT_EQ(obj(0x2021).get_u(8), 2u);
 }
 

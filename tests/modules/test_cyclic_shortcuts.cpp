@@ -3,6 +3,8 @@
 // digital input card its code stores while its inputs stay the same; anything that drives an
 // output or changes a code in between (safe state, wiring fault, RIM loss, substitute values)
 // is still seen on the next cycle.
+#include <stdexcept>
+
 #include "rack_fixture.hpp"
 
 using namespace rackcat;
@@ -97,4 +99,35 @@ TEST_F(CyclicShortcutTest, AnOfflineRimIsLeftOutOfTheCycleUntilItReturns) {
   EXPECT_EQ(dout.outputs()[0].driven, 0.0);
   EXPECT_EQ(dout.outputs()[1].driven, 1.0);
   EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x2u);
+}
+
+// A card samples a loopback or constant source from its own copy of the source's gain, offset
+// and output (Source::affine): replacing the source changes that copy, on the next cycle.
+TEST_F(CyclicShortcutTest, AReplacedSourceIsSampledOnTheNextCycle) {
+  auto [dout, din] = looped_pair_in_op(0x3);
+  const uint16_t module = din.module().number;
+  const auto din_bits = [&] { return module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u; };
+  ASSERT_EQ(din_bits(), 0x3u);
+  rack.set_source(module, 0, "constant", {{"value", "0"}});
+  cycle();
+  EXPECT_EQ(din_bits(), 0x2u);
+  EXPECT_EQ(din.inputs()[0].value, 0.0);
+  // Channel 0 reads slot 7's channel 1 inverted: 1 - output.
+  rack.set_source(module, 0, "loopback",
+                  {{"rim", "2"}, {"slot", "7"}, {"channel", "1"}, {"gain", "-1"}, {"offset", "1"}});
+  cycle();
+  EXPECT_EQ(din_bits(), 0x2u);
+  module_obj(dout, 0x7000, 0x0).set_u(1, 0x1);
+  cycle();  // slot 7 drives 0x1 now
+  cycle();  // and the inputs see it
+  EXPECT_EQ(din_bits(), 0x1u);
+  EXPECT_EQ(din.inputs()[0].value, 1.0);
+  rack.set_source(module, 0, "sine", {{"amplitude", "0"}, {"frequency", "1"}, {"offset", "0.75"}});
+  cycle();
+  EXPECT_EQ(din.inputs()[0].value, 0.75);
+  EXPECT_NE(din.source(0).describe().find("sine"), std::string::npos);
+  // No source is no change.
+  EXPECT_THROW(din.set_source(0, nullptr), std::invalid_argument);
+  cycle();
+  EXPECT_EQ(din.inputs()[0].value, 0.75);
 }

@@ -148,7 +148,7 @@ TEST_F(RackTest, AnalogInputSourcesFromTheRackFile) {
   CardDriver& ain = at(kRim1, 14);  // CAI-15 with sine/ramp/constant/noise on 0..3
   cycle();
   EXPECT_EQ(module_obj(ain, 0x6000, 0x3).get_u(3), AnalogScale{}.to_code(2.5));
-  EXPECT_NE(ain.inputs()[0].source->describe().find("sine"), std::string::npos);
+  EXPECT_NE(ain.source(0).describe().find("sine"), std::string::npos);
 }
 
 TEST_F(RackTest, OversampledDigitalInputSpreadsEightSamplesOverTheCycle) {
