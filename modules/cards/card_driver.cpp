@@ -36,6 +36,10 @@ uint16_t CardDriver::output_reaction(size_t i) const {
 
 void CardDriver::substitute_inputs(bool rim_offline) {
   if (input_reaction_ == nullptr) return;
+  // Nothing missing now nor at the last pass, and the codes that pass remembered as the last
+  // valid ones are still the codes: 0x4nnC reads 0 already (issue 16: no per-channel work while
+  // the inputs repeat).
+  if (!rim_offline && codes_repeated_ && none_missing_) return;
   uint32_t status = 0;
   // Bounds and base hoisted: the stores below must not make the loop reload the vector.
   const size_t n = std::min(inputs_.size(), reaction_channels_);
@@ -55,6 +59,7 @@ void CardDriver::substitute_inputs(bool rim_offline) {
     put_input_code(i, in.code);
   }
   input_status_slot_.set(status);
+  none_missing_ = status == 0;
 }
 
 void CardDriver::set_source(size_t i, std::unique_ptr<Source> source) {

@@ -148,6 +148,10 @@ class CardDriver {
   // Whether any input's source varies within a cycle (Source::varies_within_cycle), kept by
   // set_source.
   bool sources_vary() const { return sources_vary_; }
+  // Set by write_inputs() of a driver that knows: every input code is what it was at the
+  // previous cycle, and no input can be open (a digital input card whose word repeats).
+  // substitute_inputs() then skips its channels while its last pass found none missing.
+  bool codes_repeated_ = false;
 
   // What every cycle reads comes first, the set-up references last (issue 16: a line of racks
   // is bound by the cache lines each driver's round touches; a derived driver's own per-cycle
@@ -165,6 +169,7 @@ class CardDriver {
   uint64_t taken_epoch_ = 0;  // drive_epoch_ at outputs_taken() (0: never)
   uint32_t taken_word_ = 0;
   bool sources_vary_ = false;
+  bool none_missing_ = false;  // substitute_inputs()' last pass found no input missing
   std::vector<std::unique_ptr<Source>> sources_;  // per input, never null
 
  protected:

@@ -115,7 +115,8 @@ class DigitalInputDriver final : public CardDriver {
   void inputs_code(uint32_t word) {
     // The codes hold `word` already unless a substitute value or clear_inputs() changed one
     // since (issue 16: no per-channel stores while the inputs stay the same).
-    if (codes_current_ && word == coded_word_) return;
+    codes_repeated_ = codes_current_ && word == coded_word_;
+    if (codes_repeated_) return;
     for (size_t i = 0; i < inputs_.size(); ++i) inputs_[i].code = (word >> i) & 1u;
     coded_word_ = word;
     codes_current_ = true;

@@ -1,10 +1,11 @@
 // The cyclic path's shortcuts (issue 16) change nothing a master or the control API sees: a
 // digital output card skips its channel work while the master repeats its output data, a
-// digital input card its code stores while its inputs stay the same; anything that drives an
-// output or changes a code in between (safe state, wiring fault, RIM loss, substitute values)
-// is still seen on the next cycle.
+// digital input card its code stores and its substitute pass while its inputs stay the same;
+// anything that drives an output or changes a code in between (safe state, wiring fault, RIM
+// loss, substitute values, a new source) is still seen on the next cycle.
 #include <stdexcept>
 
+#include "mdp/substitute_values.hpp"
 #include "rack_fixture.hpp"
 
 using namespace rackcat;
@@ -130,4 +131,27 @@ TEST_F(CyclicShortcutTest, AReplacedSourceIsSampledOnTheNextCycle) {
   EXPECT_THROW(din.set_source(0, nullptr), std::invalid_argument);
   cycle();
   EXPECT_EQ(din.inputs()[0].value, 0.75);
+}
+
+// While the inputs repeat, substitute_inputs() leaves the channels alone; the last valid codes
+// still follow every change, so a RIM lost after a stretch of repeated inputs holds the latest.
+TEST_F(CyclicShortcutTest, HoldLastAfterRepeatedInputsHoldsTheLatestCodes) {
+  auto [dout, din] = looped_pair_in_op(0x3);
+  namespace sv = mdp::substitute;
+  coe::Object& reaction = module_obj(din, 0x4000, sv::kInputReaction);
+  for (uint8_t s = 1; s <= 2; ++s) reaction.set_u(s, sv::kHoldLast);
+  for (int k = 0; k < 3; ++k) cycle();
+  module_obj(dout, 0x7000, 0x0).set_u(1, 0x1);
+  for (int k = 0; k < 4; ++k) cycle();  // the new inputs, then repeated
+  ASSERT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x1u);
+  rack.set_rim_state(2, RimState::Offline);
+  cycle();
+  EXPECT_EQ(din.inputs()[0].code, 1u);
+  EXPECT_EQ(din.inputs()[1].code, 0u);
+  EXPECT_EQ(module_obj(din, 0x4000, sv::kInputStatus).get_u(0) & 0x3u, 0x3u);
+  rack.set_rim_state(2, RimState::Online);
+  cycle();
+  cycle();
+  EXPECT_EQ(module_obj(din, 0x4000, sv::kInputStatus).get_u(0), 0u);
+  EXPECT_EQ(module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u, 0x1u);
 }
