@@ -17,13 +17,6 @@ namespace sm = reg::sm;
 
 namespace {
 
-// Sets or clears bit `bit` of the little-endian event register at `address`: one byte.
-void set_event_bit(uint8_t* memory, uint32_t address, int bit, bool pending) {
-  uint8_t& byte = memory[address + static_cast<uint32_t>(bit >> 3)];
-  const auto mask = static_cast<uint8_t>(1u << (bit & 7));
-  byte = static_cast<uint8_t>(pending ? (byte | mask) : (byte & ~mask));
-}
-
 // The status bits that make SyncManager n's events pending (ETG.1000.4 §6.7; ESC datasheet
 // 0x0210, 0x0220), 0 when the event is off: ECAT event request bits 4-11 mirror SMs 0-7 whose
 // ECAT event is enabled (control bit 4): a buffer the master reads that the PDI has filled, one
@@ -39,11 +32,19 @@ uint8_t al_event_status(uint8_t control, bool enabled) {
   return sm::ecat_writes(control) ? sm::kStatusWritten : sm::kStatusRead;
 }
 
-// Sets SM n's two event bits from its `status`.
+// Sets SM n's two event bits from its `status`: one read-modify-write of each little-endian
+// register (16-bit 0x0210, 32-bit 0x0220), whichever byte SM n's bit is in.
 void write_sm_events(uint8_t* memory, int n, uint8_t ecat_status, uint8_t al_status,
                      uint8_t status) {
-  if (n < 8) set_event_bit(memory, reg::kEcatEventRequest, 4 + n, (status & ecat_status) != 0);
-  set_event_bit(memory, reg::kAlEventRequest, 8 + n, (status & al_status) != 0);
+  if (n < 8) {
+    const auto bit = static_cast<uint16_t>(1u << (4 + n));
+    const uint16_t ecat = le::get16(&memory[reg::kEcatEventRequest]);
+    le::put16(&memory[reg::kEcatEventRequest],
+              static_cast<uint16_t>((status & ecat_status) != 0 ? ecat | bit : ecat & ~bit));
+  }
+  const uint32_t bit = 1u << (8 + n);
+  const uint32_t al = le::get32(&memory[reg::kAlEventRequest]);
+  le::put32(&memory[reg::kAlEventRequest], (status & al_status) != 0 ? al | bit : al & ~bit);
 }
 
 }  // namespace

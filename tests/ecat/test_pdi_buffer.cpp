@@ -313,5 +313,34 @@ TEST(PdiBuffer, Lan9252BlockReadIsOnePramTransferGolden) {
   EXPECT_EQ(c.status(2) & (kWritten | kRead), kRead);  // the whole buffer read: completed
 }
 
+// Every SyncManager has its own event bits (ESC datasheet 0x0210, 0x0220): ECAT event request
+// bit 4+n (SMs 0-7, ECAT event enabled: control bit 4), AL event request bit 8+n (all 16, AL
+// event enabled: control bit 5). A hand-over sets or clears SM n's bits and no other bit, in
+// whichever byte of the register they are.
+TEST(PdiBuffer, EachSyncManagerRaisesItsOwnEventBits) {
+  constexpr uint8_t kOutputsWithEvents = 0x34;  // buffered, ECAT writes, ECAT and AL event
+  for (int n = 0; n < 16; ++n) {
+    ChipMaster chip;
+    const auto start = static_cast<uint16_t>(0x1000 + 0x10 * n);
+    chip.sm(n, start, 4, kOutputsWithEvents);
+    const uint32_t al_before = chip.esc.read32(reg::kAlEventRequest);
+    const uint16_t ecat_before = chip.esc.read16(reg::kEcatEventRequest);
+    ASSERT_EQ(chip.apwr(start, {1, 2, 3, 4}), 1) << n;
+    // Written by the master: AL event bit 8+n for the firmware, nothing else moves.
+    EXPECT_EQ(chip.esc.read32(reg::kAlEventRequest), al_before | (1u << (8 + n))) << n;
+    EXPECT_EQ(chip.esc.read16(reg::kEcatEventRequest), ecat_before) << n;
+    uint8_t buffer[4] = {};
+    chip.esc.pdi_read_buffer(static_cast<uint8_t>(n), start, buffer, 4);
+    // Read by the PDI: the AL bit clears; the ECAT event bit 4+n tells the master (SMs 0-7).
+    EXPECT_EQ(chip.esc.read32(reg::kAlEventRequest), al_before) << n;
+    const uint16_t ecat_read = n < 8 ? static_cast<uint16_t>(1u << (4 + n)) : 0;
+    EXPECT_EQ(chip.esc.read16(reg::kEcatEventRequest), ecat_before | ecat_read) << n;
+    ASSERT_EQ(chip.apwr(start, {5, 6, 7, 8}), 1) << n;
+    // The master's next write clears "read" (and its ECAT bit) and raises the AL bit again.
+    EXPECT_EQ(chip.esc.read16(reg::kEcatEventRequest), ecat_before) << n;
+    EXPECT_EQ(chip.esc.read32(reg::kAlEventRequest), al_before | (1u << (8 + n))) << n;
+  }
+}
+
 }  // namespace
 }  // namespace rackcat::ecat::test
