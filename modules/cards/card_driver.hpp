@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "base/cache_line_allocator.hpp"
 #include "coe/entry_slot.hpp"
 #include "coe/object_dictionary.hpp"
 #include "mdp/rack_config.hpp"
@@ -156,9 +157,10 @@ class CardDriver {
   // What every cycle reads comes first, the set-up references last (issue 16: a line of racks
   // is bound by the cache lines each driver's round touches; a derived driver's own per-cycle
   // fields follow these).
-  std::vector<InputChannel> inputs_;
-  std::vector<Source::Affine> affine_;  // per input: its source's affine(), kept by set_source
-  std::vector<OutputChannel> outputs_;
+  // Each array from a cache line: 8 channels are 4 lines (3 for the affine copies), not 5.
+  base::CacheLineVector<InputChannel> inputs_;
+  base::CacheLineVector<Source::Affine> affine_;  // per input: its source's affine()
+  base::CacheLineVector<OutputChannel> outputs_;
   coe::Object* input_reaction_ = nullptr;  // 0x4nnA
   // Cyclic path: the channels 0x4nnA has entries for, and 0x4nnC's value slot.
   size_t reaction_channels_ = 0;

@@ -1,7 +1,9 @@
 // Drivers behind a real mdp::Device: process data in and out, loopbacks, oversampling,
 // temperatures, power-on rule and safe states.
 #include <chrono>
+#include <cstdint>
 
+#include "base/cache_line_allocator.hpp"
 #include "base/round_time.hpp"
 #include "modules/cards/analog_scale.hpp"
 #include "modules/cards/temperature_scale.hpp"
@@ -274,4 +276,20 @@ TEST(RackClock, DefaultClockIsTheFirmwareRoundsTime) {
   while (std::chrono::steady_clock::now() == t1) {
   }
   EXPECT_GT(rack.now(), in_round);
+}
+
+// A card's channel arrays start on a cache line (base/cache_line_allocator.hpp): 8 channels of
+// 32 bytes are 4 lines for the cyclic path, not 5 (issue 16).
+TEST_F(RackTest, ChannelArraysStartOnACacheLine) {
+  size_t checked = 0;
+  for (uint16_t m = 1; rack.driver(m) != nullptr; ++m) {
+    const CardDriver& d = *rack.driver(m);
+    for (const void* p : {static_cast<const void*>(d.inputs().data()),
+                          static_cast<const void*>(d.outputs().data())}) {
+      if (p == nullptr) continue;
+      EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % base::kCacheLine, 0u) << "module " << m;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 10u);
 }
