@@ -107,7 +107,9 @@ TEST_F(CyclicShortcutTest, AnOfflineRimIsLeftOutOfTheCycleUntilItReturns) {
 TEST_F(CyclicShortcutTest, AReplacedSourceIsSampledOnTheNextCycle) {
   auto [dout, din] = looped_pair_in_op(0x3);
   const uint16_t module = din.module().number;
-  const auto din_bits = [&] { return module_obj(din, 0x6000, 0x0).get_u(1) & 0x3u; };
+  const auto din_bits = [this, &card = din] {
+    return module_obj(card, 0x6000, 0x0).get_u(1) & 0x3u;
+  };
   ASSERT_EQ(din_bits(), 0x3u);
   rack.set_source(module, 0, "constant", {{"value", "0"}});
   cycle();
