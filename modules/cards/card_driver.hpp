@@ -144,7 +144,7 @@ class CardDriver {
   // any other through sample() (inline: every input, every cycle).
   double sample(size_t i, double t) {
     const Source::Affine& a = affine_[i];
-    return a.x != nullptr ? a.gain * *a.x + a.offset : sources_[i]->sample(t);
+    return a.x != nullptr ? a.value() : sources_[i]->sample(t);
   }
   // Whether any input's source varies within a cycle (Source::varies_within_cycle), kept by
   // set_source.

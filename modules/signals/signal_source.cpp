@@ -215,12 +215,12 @@ std::string ReplaySource::describe() const {
 
 LoopbackSource::LoopbackSource(const double* output, std::string output_name, double gain,
                                double offset)
-    : output_(output), gain_(gain), offset_(offset), name_(std::move(output_name)) {
+    : affine_{output, gain, offset}, name_(std::move(output_name)) {
   if (output == nullptr) throw std::invalid_argument("loopback: no output channel");
 }
 
 std::string LoopbackSource::describe() const {
-  return fmt::format("loopback output={} gain={} offset={}", name_, gain_, offset_);
+  return fmt::format("loopback output={} gain={} offset={}", name_, affine_.gain, affine_.offset);
 }
 
 PlantSource::PlantSource(const StateSpacePlant& plant, size_t index, std::string plant_name)

@@ -43,6 +43,7 @@ class alignas(32) Source {
     const double* x = nullptr;
     double gain = 1.0;
     double offset = 0.0;
+    double value() const { return gain * *x + offset; }
   };
   virtual Affine affine() const { return {}; }
 };
@@ -162,16 +163,15 @@ class LoopbackSource final : public Source {
  public:
   LoopbackSource(const double* output, std::string output_name, double gain = 1.0,
                  double offset = 0.0);
-  double sample(double) override { return gain_ * *output_ + offset_; }
+  double sample(double) override { return affine_.value(); }
   std::string describe() const override;
   bool varies_within_cycle() const override { return false; }
-  Affine affine() const override { return {output_, gain_, offset_}; }
+  Affine affine() const override { return affine_; }
 
  private:
   // What sample() reads next to the vtable pointer (the aligned first 32 bytes), the name
   // last: one cache line per sample in a line of racks (issue 16).
-  const double* output_;
-  double gain_, offset_;
+  Affine affine_;  // x: the output channel's value
   std::string name_;
 };
 
