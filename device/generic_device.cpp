@@ -132,9 +132,9 @@ size_t GenericDevice::CoeMailbox::poll(std::span<uint8_t> reply) {
   return device.sdo_ ? device.sdo_->poll(reply) : 0;
 }
 
-void GenericDevice::update_inputs(std::span<uint8_t> inputs) {
+bool GenericDevice::update_inputs(std::span<uint8_t> inputs) {
   std::unique_lock lock(mutex_, std::try_to_lock);
-  if (!lock.owns_lock()) return;  // the control side is writing: keep last cycle's inputs
+  if (!lock.owns_lock()) return true;  // the control side is writing: keep last cycle's inputs
   for (const auto& w : wires_) {
     std::unique_lock source(w.source->mutex_, std::try_to_lock);
     if (source.owns_lock()) copy_bits(w.source->outputs_, w.from_bit, inputs_, w.to_bit, w.bits);
@@ -155,6 +155,7 @@ void GenericDevice::update_inputs(std::span<uint8_t> inputs) {
     const size_t n = std::min(inputs.size(), inputs_.size());
     std::copy_n(inputs_.begin(), n, inputs.begin());
   }
+  return true;
 }
 
 void GenericDevice::on_outputs(std::span<const uint8_t> outputs) {

@@ -59,7 +59,7 @@ class GenericDevice final : public ecat::Application {
   bool mailbox_pending() const override {
     return (sdo_ && sdo_->has_pending()) || (foe_ && !foe_->idle());
   }
-  void update_inputs(std::span<uint8_t> inputs) override;
+  bool update_inputs(std::span<uint8_t> inputs) override;
   void on_outputs(std::span<const uint8_t> outputs) override;
   void on_watchdog_expired() override;
 

@@ -58,7 +58,16 @@ class Application {
   // (after each SM2 write, or at SYNC0 when synchronised); on_outputs delivers a complete,
   // consistent SM2 buffer after the master wrote it, in OP. Both run on the cyclic path: no
   // allocation, no blocking.
-  virtual void update_inputs(std::span<uint8_t> inputs) = 0;
+  //
+  // update_inputs returns true when the image may differ from the one last handed over, false
+  // when the device left it untouched because it is provably identical to that image. On
+  // false the firmware does not write SM3 again (except for the first image after entering
+  // SAFEOP, which always goes out). That is invisible to the master on a real ESC too: a
+  // 3-buffer SM3 keeps serving the newest complete buffer to every read (ETG.1000.4 §6.7.2),
+  // so the bytes on the wire are the same. What does differ is that no buffer is handed over:
+  // the buffer-state bits of the SM3 status register (0x0805+8*3, bits 4-5) stay, and no SM3
+  // event follows for the PDI.
+  virtual bool update_inputs(std::span<uint8_t> inputs) = 0;
   virtual void on_outputs(std::span<const uint8_t> outputs) = 0;
 
   // SYNC0/SYNC1 events from the distributed-clock unit (ETG.1000.4 §6.8.3).

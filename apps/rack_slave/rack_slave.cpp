@@ -105,8 +105,9 @@ size_t RackSlave::CoeMailbox::poll(std::span<uint8_t> reply) {
   return n;
 }
 
-void RackSlave::update_inputs(std::span<uint8_t> inputs) {
+bool RackSlave::update_inputs(std::span<uint8_t> inputs) {
   device_->read_inputs(inputs);
+  return true;
 }
 
 void RackSlave::on_outputs(std::span<const uint8_t> outputs) {

@@ -53,7 +53,7 @@ class RackSlave final : public ecat::Application {
   ecat::ProcessDataSizes process_data_sizes() const override;
   void add_mailbox_protocols(ecat::MailboxServer& server) override;
   bool mailbox_pending() const override;
-  void update_inputs(std::span<uint8_t> inputs) override;
+  bool update_inputs(std::span<uint8_t> inputs) override;
   void on_outputs(std::span<const uint8_t> outputs) override;
   void on_sync(int which, uint64_t system_time_ns) override;
   void on_watchdog_expired() override;

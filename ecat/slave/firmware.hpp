@@ -129,9 +129,10 @@ class Firmware {
   // cache lines as it fits.
   PdiPort& pdi_;
   Application& app_;
-  bool polls_status_ = false;     // poll() must run without an event (see wants_service)
-  bool eeprom_pending_ = false;   // store_eeprom() waits for the master to offer the EEPROM
-  bool dc_synchronised_ = false;  // SYNC0 was running when SAFEOP was entered
+  bool polls_status_ = false;        // poll() must run without an event (see wants_service)
+  bool eeprom_pending_ = false;      // store_eeprom() waits for the master to offer the EEPROM
+  bool dc_synchronised_ = false;     // SYNC0 was running when SAFEOP was entered
+  bool inputs_handed_over_ = false;  // SM3 was written since pd_start
   EsmState state_ = EsmState::Init;
   std::array<Sm, 4> sm_taken_{};  // SM0-SM3 as checked when the current state was entered
   std::span<uint8_t> outputs_;    // SM2 as last read, in images_

@@ -28,6 +28,7 @@ void Firmware::pd_start() {
   set_sm_deactivated(2, false);
   set_sm_deactivated(3, false);
   // The master's first read in SAFEOP finds valid inputs.
+  inputs_handed_over_ = false;
   pd_produce_inputs();
 }
 
@@ -43,10 +44,13 @@ void Firmware::pd_outputs_written() {
 void Firmware::pd_produce_inputs() {
   const Sm& s = sm_taken_[3];
   if (!s.enabled || inputs_.size() != s.length || inputs_.empty()) return;
-  app_.update_inputs(inputs_);
+  // An image the device reports unchanged is the one SM3 already serves (Application::
+  // update_inputs); the first one after pd_start always goes out.
+  if (!app_.update_inputs(inputs_) && inputs_handed_over_) return;
   // One block write of the whole buffer: its last byte hands it to the master (the newest of
   // the three buffers).
   pdi_.write_buffer(3, s.start, inputs_);
+  inputs_handed_over_ = true;
 }
 
 void Firmware::pd_sync(int which) {

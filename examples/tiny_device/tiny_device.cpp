@@ -100,13 +100,14 @@ class TinyDevice final : public ecat::Application, public ecat::MailboxProtocol 
     return sdo_.handle(request.data, reply, request.state);
   }
   size_t poll(std::span<uint8_t> reply) override { return sdo_.poll(reply); }
-  void update_inputs(std::span<uint8_t> inputs) override {
+  bool update_inputs(std::span<uint8_t> inputs) override {
     ++counter_;
     od_.find(0x6000)->set_u(0, counter_);
     if (inputs.size() >= 2) {
       inputs[0] = static_cast<uint8_t>(counter_);
       inputs[1] = static_cast<uint8_t>(counter_ >> 8);
     }
+    return true;
   }
   void on_outputs(std::span<const uint8_t>) override {}
 

@@ -42,8 +42,9 @@ class FuzzDevice final : public Application, public MailboxProtocol {
     std::fill_n(reply.begin(), 8, uint8_t{0x5A});
     return 8;
   }
-  void update_inputs(std::span<uint8_t> inputs) override {
+  bool update_inputs(std::span<uint8_t> inputs) override {
     std::fill(inputs.begin(), inputs.end(), uint8_t(n_));
+    return true;
   }
   void on_outputs(std::span<const uint8_t> outputs) override {
     last_ = outputs.empty() ? 0 : outputs[0];

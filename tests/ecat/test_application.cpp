@@ -130,10 +130,12 @@ size_t TestApplication::poll(std::span<uint8_t> reply) {
   return n;
 }
 
-void TestApplication::update_inputs(std::span<uint8_t> inputs) {
+bool TestApplication::update_inputs(std::span<uint8_t> inputs) {
   ++inputs_count;
   inputs_time = base::RoundTime::now();
+  if (!inputs_changed) return false;
   std::copy_n(inputs_value.begin(), std::min(inputs.size(), inputs_value.size()), inputs.begin());
+  return true;
 }
 
 void TestApplication::on_outputs(std::span<const uint8_t> outputs) {

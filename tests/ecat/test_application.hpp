@@ -42,7 +42,7 @@ class TestApplication : public Application, public MailboxProtocol {
   mailbox::Answer on_request(const MailboxRequest& request, std::span<uint8_t> reply) override;
   size_t poll(std::span<uint8_t> reply) override;
   bool mailbox_pending() const override { return !pending_emergency.empty(); }
-  void update_inputs(std::span<uint8_t> inputs) override;
+  bool update_inputs(std::span<uint8_t> inputs) override;
   void on_outputs(std::span<const uint8_t> outputs) override;
   void on_sync(int which, uint64_t system_time_ns) override;
   void on_watchdog_expired() override { ++watchdog_expiries; }
@@ -52,6 +52,8 @@ class TestApplication : public Application, public MailboxProtocol {
   uint16_t veto_code = 0;             // returned by on_state_request when non-zero
   EsmState veto_to = EsmState::Init;  // ... for requests to this state
   std::vector<uint8_t> inputs_value = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66};
+  // What update_inputs answers; false leaves the image untouched (the device's "unchanged").
+  bool inputs_changed = true;
   std::vector<uint8_t> last_outputs;
   int outputs_count = 0;
   int inputs_count = 0;

@@ -313,6 +313,59 @@ TEST_F(FirmwareTest, OutputsReachTheDeviceInOpAndInputsFollow) {
             app.inputs_value);
 }
 
+// The device's "unchanged" (Application::update_inputs returns false) spares the SM3 write:
+// SM3 keeps serving the image it has (ETG.1000.4 §6.7.2).
+struct InputsHandOverTest : FirmwareTest {
+  int sm3_writes() const {
+    int n = 0;
+    for (const auto& w : pdi.writes) n += w.address == kInputsStart ? 1 : 0;
+    return n;
+  }
+  std::vector<uint8_t> sm3() const {
+    return {&pdi.mem[kInputsStart], &pdi.mem[kInputsStart + kInputBytes]};
+  }
+  void master_writes_outputs() {
+    pdi.raise_event(0x0400);
+    fw->poll();
+  }
+};
+
+TEST_F(InputsHandOverTest, UnchangedImageIsNotWrittenAgain) {
+  to_op();
+  const int before = sm3_writes();
+  const int asked = app.inputs_count;
+  app.inputs_changed = false;
+  master_writes_outputs();
+  master_writes_outputs();
+  EXPECT_EQ(app.inputs_count, asked + 2);  // the device is asked every cycle
+  EXPECT_EQ(sm3_writes(), before);
+  EXPECT_EQ(sm3(), app.inputs_value);  // SM3 still serves the last image
+}
+
+TEST_F(InputsHandOverTest, ChangedImageIsWritten) {
+  to_op();
+  app.inputs_changed = false;
+  master_writes_outputs();
+  const int before = sm3_writes();
+  app.inputs_changed = true;
+  app.inputs_value = {9, 8, 7, 6, 5, 4};
+  master_writes_outputs();
+  EXPECT_EQ(sm3_writes(), before + 1);
+  EXPECT_EQ(sm3(), app.inputs_value);
+}
+
+TEST_F(InputsHandOverTest, FirstImageAfterSafeopAlwaysGoesOut) {
+  app.inputs_changed = false;
+  to_safeop();
+  EXPECT_EQ(sm3_writes(), 1);
+  // Back to PREOP and into SAFEOP again: the next pd_start hands over its first image too.
+  ASSERT_EQ(request(0x02), 0x0002);
+  ASSERT_EQ(request(0x04), 0x0004);
+  EXPECT_EQ(sm3_writes(), 2);
+  master_writes_outputs();
+  EXPECT_EQ(sm3_writes(), 2);
+}
+
 // ---- mailbox ---------------------------------------------------------------------------
 
 struct MailboxTest : FirmwareTest {

@@ -28,9 +28,10 @@ class LoopbackApplication final : public ecat::Application {
     return {kTestProcessDataBytes, kTestProcessDataBytes};
   }
 
-  void update_inputs(std::span<uint8_t> inputs) override {
+  bool update_inputs(std::span<uint8_t> inputs) override {
     const size_t n = std::min(inputs.size(), last_outputs_.size());
     std::copy_n(last_outputs_.begin(), n, inputs.begin());
+    return true;
   }
   void on_outputs(std::span<const uint8_t> outputs) override {
     const size_t n = std::min(outputs.size(), last_outputs_.size());
