@@ -1,16 +1,16 @@
-// An allocator whose blocks start on a cache line (64 bytes on the x86-64 and AArch64 machines
-// rackcat runs on): an array of small per-cycle records then touches ceil(size / 64) lines
-// instead of one more in most cases (issue 16: in a line of racks every line a slave's round
-// touches misses again the next frame). For vectors built at start-up, never on the cyclic path.
+// An allocator whose blocks start on a cache line (base::kCacheLine): an array of small per-cycle
+// records then touches ceil(size / kCacheLine) lines instead of one more in most cases (issue 16:
+// in a line of racks every line a slave's round touches misses again the next frame). For vectors
+// built at start-up, never on the cyclic path.
 #pragma once
 
 #include <cstddef>
 #include <new>
 #include <vector>
 
-namespace rackcat::base {
+#include "base/cache_line.hpp"
 
-inline constexpr size_t kCacheLine = 64;
+namespace rackcat::base {
 
 template <class T>
 struct CacheLineAllocator {

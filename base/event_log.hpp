@@ -24,6 +24,8 @@
 #include <cstring>
 #include <string_view>
 
+#include "base/cache_line.hpp"
+
 namespace rackcat::base {
 
 enum class EventKind : uint8_t {
@@ -166,8 +168,8 @@ class EventLog {
   }
 
   std::array<Cell, kCapacity> cells_;
-  alignas(64) std::atomic<size_t> head_{0};
-  alignas(64) size_t tail_ = 0;
+  alignas(kCacheLine) std::atomic<size_t> head_{0};
+  alignas(kCacheLine) size_t tail_ = 0;
   std::atomic<uint64_t> dropped_{0};
   std::atomic<bool> enabled_{false};
   std::array<RateLimit, 2> limits_;

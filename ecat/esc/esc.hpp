@@ -21,6 +21,7 @@
 #include <span>
 #include <vector>
 
+#include "base/cache_line.hpp"
 #include "ecat/clock.hpp"
 #include "ecat/esc/esc_memory.hpp"
 #include "ecat/frame.hpp"
@@ -340,11 +341,12 @@ class Esc {
     uint16_t fmmus = 0;
     uint8_t usable = 0;
     bool valid = false;
-    bool whole = false;           // every FMMU the datagram meets is whole and completely covered
-    bool keep_incoming = false;   // the reads fill bytes the writes take
-    uint16_t reads = 0;           // the FMMUs read through (bit n = FMMU n)
-    uint16_t writes = 0;          // ... and written through
-    uint16_t incoming_first = 0;  // the datagram bytes the writes take, [first, end)
+    bool whole = false;   // every FMMU the datagram meets is whole and completely covered
+    uint16_t reads = 0;   // the FMMUs read through (bit n = FMMU n)
+    uint16_t writes = 0;  // ... and written through
+    // The datagram bytes the writes take, [first, end), kept aside when the reads fill some of
+    // them; empty otherwise.
+    uint16_t incoming_first = 0;
     uint16_t incoming_end = 0;
     // FMMU n's first byte in the datagram's data (its logical start - the datagram's address),
     // for n in reads | writes.
@@ -443,7 +445,7 @@ class Esc {
   // PDI paths (one line), the whole-buffer plan and the FMMUs' SyncManagers (the next), then the
   // SyncManagers (SM0-SM3 on the third line). The FMMUs, the next-event bound and the
   // configuration-time state follow.
-  alignas(64) EscMemory mem_;  // registers and process RAM, resident as far as used
+  alignas(base::kCacheLine) EscMemory mem_;  // registers and process RAM, resident as far as used
   PassTimes pass_{};
   uint64_t watchdog_period_ns_ = 0;  // derive_watchdog_period; 0: disabled
   uint64_t watchdog_deadline_ = 0;   // clock time, armed by SM2 writes with trigger enabled

@@ -228,8 +228,7 @@ void Esc::plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint1
   p.whole = true;
   p.reads = reads.fmmus;
   p.writes = writes.fmmus;
-  p.keep_incoming = reads.meets(writes);
-  if (p.keep_incoming) {
+  if (reads.meets(writes)) {
     p.incoming_first = static_cast<uint16_t>(writes.first);
     p.incoming_end = static_cast<uint16_t>(writes.end);
   }
@@ -243,8 +242,9 @@ int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint
   }
   if (!p.whole) return -1;
   if ((p.reads | p.writes) == 0) return 0;
-  const uint8_t* incoming =
-      p.keep_incoming ? keep_incoming(data, p.incoming_first, p.incoming_end) : data;
+  const uint8_t* incoming = p.incoming_first < p.incoming_end
+                                ? keep_incoming(data, p.incoming_first, p.incoming_end)
+                                : data;
   bool read_done = false;
   bool write_done = false;
   for (uint16_t m = p.reads; m != 0; m = static_cast<uint16_t>(m & (m - 1))) {

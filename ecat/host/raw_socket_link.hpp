@@ -15,6 +15,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "base/cache_line.hpp"
+
 namespace rackcat::ecat {
 
 // Why opening the link failed. The runner turns NoInterface and NoPermission into a
@@ -77,7 +79,7 @@ class RawSocketLink {
   int fd_ = -1;
   int ifindex_ = 0;
   std::array<uint8_t, 6> mac_{};
-  alignas(64) std::array<uint8_t, kMaxFrame> rx_{};
+  alignas(base::kCacheLine) std::array<uint8_t, kMaxFrame> rx_{};
   uint64_t rx_frames_ = 0;
   uint64_t tx_frames_ = 0;
   uint64_t ignored_ = 0;
