@@ -141,4 +141,10 @@ void ProcessImage::read_inputs(std::span<uint8_t> sm3) {
   }
 }
 
+bool ProcessImage::maps_input(const Object& o) const {
+  const uint8_t* image = o.image().data();
+  return std::any_of(inputs_.begin(), inputs_.end(),
+                     [image](const Copy& c) { return c.image == image; });
+}
+
 }  // namespace rackcat::coe

@@ -48,6 +48,10 @@ class ProcessImage {
   size_t input_bits() const { return input_bits_; }
   std::span<const Copy> output_copies() const { return outputs_; }
   std::span<const Copy> input_copies() const { return inputs_; }
+  // Whether a mapped object runs a process-data hook (its value may change without a write).
+  bool hooked() const { return !output_hooks_.empty() || !input_hooks_.empty(); }
+  // Whether an entry of `o` is mapped into the inputs (SM3).
+  bool maps_input(const Object& o) const;
 
  private:
   struct Direction {

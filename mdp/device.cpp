@@ -31,6 +31,7 @@
 #include "mdp/parameter_set.hpp"
 #include "mdp/parameter_store.hpp"
 #include "mdp/parameter_writer.hpp"
+#include "mdp/repeated_cycles.hpp"
 #include "mdp/state_directory.hpp"
 
 namespace rackcat::mdp {
@@ -81,6 +82,28 @@ struct Device::Impl final : DeviceRuntime {
   }
   // --- What write_outputs/read_inputs touch, side by side (issue 16: the cyclic path of a
   // line of devices is bound by cache misses, not instructions).
+  // A cycle that repeats the last one is skipped (mdp/repeated_cycles.hpp): read first.
+  RepeatedCycles repeats;
+  // A skipped cycle still latches the inputs (0xF6F0, not mapped when cycles repeat): its time
+  // goes into the objects when anything outside the cycle next looks (disturb(), dictionary()),
+  // since nothing can read them before that.
+  bool latch_pending = false;
+  base::RoundTime::Clock::time_point latch_at{};
+  void disturb() {
+    repeats.disturb();
+    flush_latch();
+  }
+  void flush_latch() {
+    if (!latch_pending) return;
+    latch_pending = false;
+    set_array(latch_local_slots, uptime_us(latch_at));
+  }
+  bool listeners_repeat() const {
+    for (const CycleListener* l : cycle_listeners) {
+      if (!l->repeats_cycle()) return false;
+    }
+    return true;
+  }
   // The listeners of the cyclic callbacks (ListenerScope::All), a subset of `listeners`.
   std::vector<CycleListener*> cycle_listeners;
   // 0xF6F0/0xF6F2 (input latch times): their entries' slots, found once when the dictionary is
@@ -129,10 +152,9 @@ struct Device::Impl final : DeviceRuntime {
   }
 
   // The firmware round's time (base/round_time.hpp): one clock read per round, not per slave.
-  uint32_t uptime_us() const {
+  uint32_t uptime_us(base::RoundTime::Clock::time_point at = base::RoundTime::now()) const {
     return static_cast<uint32_t>(
-        std::chrono::duration_cast<std::chrono::microseconds>(base::RoundTime::now() - power_on)
-            .count());
+        std::chrono::duration_cast<std::chrono::microseconds>(at - power_on).count());
   }
 
   // Entries 1..sub0 of a latch array. Both arrays are read-only with one entry per module
@@ -145,6 +167,15 @@ struct Device::Impl final : DeviceRuntime {
   }
   static void set_array(std::vector<coe::EntrySlot>& slots, uint64_t value) {
     for (coe::EntrySlot& slot : slots) slot.set(value);
+  }
+  // The process data starts: a cycle may repeat unless a mapped object runs a process-data
+  // hook or a mapped entry is an input latch time (0xF6F0/0xF6F2 change without the outputs).
+  void arm_repeats() {
+    bool possible = !image->hooked();
+    for (const uint16_t index : {uint16_t{0xF6F0}, uint16_t{0xF6F2}}) {
+      if (const Object* o = od.find(index); o != nullptr && image->maps_input(*o)) possible = false;
+    }
+    repeats.arm(image->output_bytes(), image->input_bytes(), possible);
   }
 
   // --- stored parameters -------------------------------------------------------------------
@@ -524,9 +555,11 @@ const RackConfig& Device::config() const {
   return impl_->config;
 }
 coe::ObjectDictionary& Device::dictionary() {
+  impl_->disturb();  // the caller may change what the next cycle reads
   return impl_->od;
 }
 const coe::ObjectDictionary& Device::dictionary() const {
+  impl_->flush_latch();  // the objects as they are
   return impl_->od;
 }
 std::span<const Module> Device::modules() const {
@@ -534,6 +567,7 @@ std::span<const Module> Device::modules() const {
 }
 
 mailbox::Answer Device::coe_request(std::span<const uint8_t> request, std::span<uint8_t> reply) {
+  impl_->disturb();
   const mailbox::Answer a = impl_->sdo->handle(request, reply, impl_->state);
   impl_->raise_mailbox_hint();  // e.g. an SDO Information list in fragments
   return a;
@@ -555,18 +589,21 @@ bool Device::mailbox_pending() const {
 }
 
 size_t Device::coe_poll(std::span<uint8_t> reply) {
+  impl_->disturb();  // a command's result may change objects
   impl_->complete_jobs();
   return impl_->sdo->poll(reply);
 }
 
 mailbox::Answer Device::foe_request(std::span<const uint8_t> request, size_t capacity,
                                     std::span<uint8_t> reply) {
+  impl_->disturb();
   const mailbox::Answer a = impl_->foe->handle_mailbox(request, capacity, reply);
   impl_->raise_mailbox_hint();  // an open transfer (its timeout, a deferred read)
   return a;
 }
 
 size_t Device::foe_poll(std::span<uint8_t> reply) {
+  impl_->disturb();
   impl_->complete_jobs();
   return impl_->foe->poll(reply);
 }
@@ -598,6 +635,7 @@ const coe::diag::History& Device::diagnosis() const {
 }
 
 void Device::reset_exceptions() {
+  impl_->disturb();
   impl_->reset_exceptions();
 }
 
@@ -618,6 +656,7 @@ uint64_t Device::diagnosis_time(bool& local) const {
 
 void Device::enumerate_modules(std::span<const uint8_t> present) {
   Impl& d = *impl_;
+  d.disturb();
   std::vector<uint8_t> now(d.config.modules.size(), 1);
   for (size_t i = 0; i < now.size() && i < present.size(); ++i) now[i] = present[i] != 0;
   mdp::enumerate_modules(d.od, d.config, d.enumerated, now);
@@ -626,6 +665,7 @@ void Device::enumerate_modules(std::span<const uint8_t> present) {
 }
 
 uint16_t Device::request_state(EsmState from, EsmState to) {
+  impl_->disturb();
   const bool entering_safeop = to == EsmState::SafeOp || to == EsmState::Op;
   if (entering_safeop && (from == EsmState::PreOp || from == EsmState::Init)) {
     if (module_lists_mismatch(impl_->od)) {
@@ -652,7 +692,11 @@ void Device::state_changed(EsmState from, EsmState to) {
     d.sdo->reset();
     d.foe->reset();
   }
-  if (to == EsmState::SafeOp && from == EsmState::PreOp) d.image->compile();
+  if (to == EsmState::SafeOp && from == EsmState::PreOp) {
+    d.image->compile();
+    d.arm_repeats();
+  }
+  d.disturb();
   d.notify([&](CycleListener& l) { l.on_state_changed(*this, from, to); });
 }
 
@@ -669,12 +713,21 @@ uint16_t Device::input_bytes() const {
 
 void Device::write_outputs(std::span<const uint8_t> sm2) {
   Impl& d = *impl_;
+  if (d.repeats.skip_outputs(sm2, [&d] { return d.listeners_repeat(); })) return;
   d.image->write_outputs(sm2);
   d.notify_cycle([&](CycleListener& l) { l.on_outputs(*this); });
 }
 
-void Device::read_inputs(std::span<uint8_t> sm3) {
+bool Device::read_inputs(std::span<uint8_t> sm3) {
   Impl& d = *impl_;
+  if (!d.repeats.inputs_wanted()) {
+    // A repeated cycle: SM3 holds these inputs already; only the latch time moves (0xF6F0 is
+    // not mapped, or the device would not repeat).
+    d.latch_pending = true;
+    d.latch_at = base::RoundTime::now();
+    return false;
+  }
+  d.latch_pending = false;
   d.notify_cycle([&](CycleListener& l) { l.before_inputs(*this); });
   // 0xF6F0/0xF6F2: the input latch time of every module is this update.
   if (!d.latch_local_slots.empty()) Impl::set_array(d.latch_local_slots, d.uptime_us());
@@ -684,10 +737,17 @@ void Device::read_inputs(std::span<uint8_t> sm3) {
     d.latch_esc_stale = false;
   }
   d.image->read_inputs(sm3);
+  d.repeats.inputs_made(sm3, [&d] { return d.listeners_repeat(); });
+  return true;
+}
+
+void Device::disturb() {
+  impl_->disturb();
 }
 
 void Device::sync_event(int which, uint64_t system_time_ns) {
   Impl& d = *impl_;
+  d.disturb();
   if (which == 0) {
     d.last_sync_ns = system_time_ns;
     d.last_sync_at = std::chrono::steady_clock::now();
@@ -696,14 +756,17 @@ void Device::sync_event(int which, uint64_t system_time_ns) {
 }
 
 void Device::watchdog_expired() {
+  impl_->disturb();
   impl_->notify([&](CycleListener& l) { l.on_watchdog_expired(*this); });
 }
 
 SyncStatistics& Device::sync_statistics(bool outputs) {
+  impl_->disturb();
   return impl_->sync_statistics(outputs);
 }
 
 void Device::add_listener(CycleListener* listener, ListenerScope scope) {
+  impl_->disturb();
   auto& v = impl_->listeners;
   if (std::find(v.begin(), v.end(), listener) != v.end()) return;
   v.push_back(listener);
@@ -711,6 +774,7 @@ void Device::add_listener(CycleListener* listener, ListenerScope scope) {
 }
 
 void Device::remove_listener(CycleListener* listener) {
+  impl_->disturb();
   for (auto* v : {&impl_->listeners, &impl_->cycle_listeners}) {
     v->erase(std::remove(v->begin(), v->end(), listener), v->end());
   }

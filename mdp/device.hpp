@@ -37,6 +37,12 @@ class CycleListener {
   // Refresh the 0x6nnX objects (and other TxPDO-mappable entries) before they are packed
   // into the SM3 buffer.
   virtual void before_inputs(Device&) {}
+  // Whether a cycle with the same output data as the last one would change no input and no
+  // object of this listener's (mdp/repeated_cycles.hpp): asked after a full cycle, to let the
+  // device skip the next repeated ones, and before each repeated one (a timer of the
+  // listener's may be due). Whatever changes the listener from outside the cycle must call
+  // Device::disturb(). The default, false, runs every cycle in full.
+  virtual bool repeats_cycle() const { return false; }
   // After the ESM changed state (accepted request, error fallback, watchdog): leaving OP is
   // where outputs go to their safe state (0x4nn0..0x4nn3).
   virtual void on_state_changed(Device&, EsmState /*from*/, EsmState /*to*/) {}
@@ -158,8 +164,15 @@ class Device {
   uint16_t input_bytes() const;   // SM3 size
   // Cyclic path, no allocation: unpack SM2 into the mapped objects then call on_outputs();
   // call before_inputs() then pack the mapped objects into SM3. Shorter spans copy what fits.
+  // A cycle that repeats the last one is skipped (mdp/repeated_cycles.hpp): write_outputs
+  // leaves everything as it is, and read_inputs answers false with `sm3` untouched, which
+  // then holds what the last full cycle packed. true: `sm3` was packed.
   void write_outputs(std::span<const uint8_t> sm2);
-  void read_inputs(std::span<uint8_t> sm3);
+  bool read_inputs(std::span<uint8_t> sm3);
+  // Something outside the cyclic exchange (a control command, a RIM link, a test) is about to
+  // read or change the device or its listeners: the next cycle runs in full. The device's own
+  // entry points (mailbox, ESM, SYNC, watchdog, the mutable dictionary()) call it themselves.
+  void disturb();
   void sync_event(int which, uint64_t system_time_ns);
   void watchdog_expired();
   SyncStatistics& sync_statistics(bool outputs);  // 0x1C32 (true) / 0x1C33 (false)

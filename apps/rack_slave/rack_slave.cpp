@@ -106,8 +106,7 @@ size_t RackSlave::CoeMailbox::poll(std::span<uint8_t> reply) {
 }
 
 bool RackSlave::update_inputs(std::span<uint8_t> inputs) {
-  device_->read_inputs(inputs);
-  return true;
+  return device_->read_inputs(inputs);
 }
 
 void RackSlave::on_outputs(std::span<const uint8_t> outputs) {

@@ -77,6 +77,12 @@ class CardDriver {
   virtual void write_inputs(double t, double dt) = 0;
   // Leaving OP: drive the 0x4nnX substitute values.
   virtual void apply_safe_state() {}
+  // Whether read_outputs() and write_inputs() depend on nothing but the 0x7nnX values and the
+  // inputs' sources, every source affine in a value only a cycle's outputs move (a constant, a
+  // loopback): then a cycle that repeats the last one's output data repeats its inputs too,
+  // and the device may skip it (mdp::CycleListener::repeats_cycle). False by default: time,
+  // oversampling, a filter, a queue fed by another thread.
+  virtual bool time_invariant() const { return false; }
   // Drive every output to 0 (power-on before the first valid data, RIM offline: the RIM
   // drives its outputs to the TÜV-safe de-energised level).
   void de_energise();
@@ -149,6 +155,13 @@ class CardDriver {
   // Whether any input's source varies within a cycle (Source::varies_within_cycle), kept by
   // set_source.
   bool sources_vary() const { return sources_vary_; }
+  // Whether every input's source is affine (Source::affine: sampled from the driver's copy).
+  bool sources_affine() const {
+    for (const Source::Affine& a : affine_) {
+      if (a.x == nullptr) return false;
+    }
+    return true;
+  }
   // Set by write_inputs() of a driver that knows: every input code is what it was at the
   // previous cycle, and no input can be open (a digital input card whose word repeats).
   // substitute_inputs() then skips its channels while its last pass found none missing.

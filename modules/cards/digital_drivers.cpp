@@ -82,6 +82,8 @@ class DigitalInputDriver final : public CardDriver {
   }
 
   const char* input_unit() const override { return "bit"; }
+  // Every sample of an affine source is the same: oversampling repeats it (write_inputs).
+  bool time_invariant() const override { return sources_affine(); }
 
  protected:
   void put_input_code(size_t i, uint32_t code) override {
@@ -223,6 +225,8 @@ class DigitalOutputDriver final : public CardDriver {
   }
   void clear_inputs() override { feedback_word_.set(0); }
   const char* output_unit() const override { return "bit"; }
+  // The outputs follow 0x7nnX, the feedback contacts the wire.
+  bool time_invariant() const override { return true; }
   bool detects_wiring_faults() const override { return sourcing_; }
 
  private:
@@ -285,6 +289,7 @@ class DioDriver final : public CardDriver {
  public:
   const char* input_unit() const override { return "bit"; }
   const char* output_unit() const override { return "bit"; }
+  bool time_invariant() const override { return sources_affine(); }
 
  private:
   void drive_word(uint32_t word) {

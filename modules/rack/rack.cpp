@@ -6,6 +6,7 @@
 #include "base/event_log.hpp"
 #include "base/round_time.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -179,6 +180,7 @@ double Rack::now() const {
 }
 
 CardDriver* Rack::driver(uint16_t module_number) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   if (module_number == 0 || module_number > drivers_.size()) return nullptr;
   return drivers_[module_number - 1].get();
 }
@@ -230,13 +232,27 @@ void Rack::before_inputs(mdp::Device&) {
   evaluate_faults();
   channel_diag_->evaluate([this](size_t i) { return module_online(i); });
   if (t >= cpu_next_publish_) publish_cpu_temperature();
+  const bool tree_changed = dirty_;
   if (dirty_) {
     tree_.update();
     dirty_ = false;
   }
+  // Whether the next cycle with the same outputs would do all of this again to the same end
+  // (mdp/repeated_cycles.hpp): no exception changed now, no plant steps with time, no UART
+  // queue fills from its terminal, and every card follows only the outputs and constant or
+  // looped-back sources. Control commands and RIM links call device_.disturb() first.
+  settled_ = !tree_changed && state_ == EsmState::Op && plants_.empty() && uarts_.empty() &&
+             std::all_of(cycle_.begin(), cycle_.end(),
+                         [](const CycleCard& c) { return c.driver->time_invariant(); });
+}
+
+bool Rack::repeats_cycle() const {
+  // The 30 s CPU temperature reading (guide §4.8) is the rack's own timer.
+  return settled_ && now() < cpu_next_publish_;
 }
 
 void Rack::on_clock() {
+  device_.disturb();  // outside the cycle: the next one runs in full
   if (now() >= cpu_next_publish_) publish_cpu_temperature();
   if (dirty_) {
     tree_.update();
@@ -315,6 +331,7 @@ void Rack::on_detect_modules(mdp::Device& device) {
 }
 
 void Rack::enumerate(mdp::Device& device) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   const auto modules = device.modules();
   std::vector<uint8_t> present(modules.size(), 1);
   if (!detect_modules_override()) {
@@ -392,6 +409,7 @@ void log_fault(base::FaultWhat what, uint16_t module, size_t channel_or_rim, uin
 }  // namespace
 
 void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   auto it = rims_.find(rr);
   if (it == rims_.end()) throw std::invalid_argument(fmt::format("there is no RIM {}", rr));
   RimStatus& rim = it->second;
@@ -429,6 +447,7 @@ void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
 }
 
 void Rack::set_fan_rpm(uint8_t rr, std::string_view zone, double rpm) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   if (!std::isfinite(rpm) || rpm < 0.0 || rpm > 100000.0)
     throw std::invalid_argument("rpm must be 0..100000");
   if (rr == 0) {
@@ -458,6 +477,7 @@ void Rack::set_fan_rpm(uint8_t rr, std::string_view zone, double rpm) {
 }
 
 void Rack::set_rim_mcm_errors(uint8_t rr, uint32_t bits) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   auto it = rims_.find(rr);
   if (it == rims_.end()) throw std::invalid_argument(fmt::format("there is no RIM {}", rr));
   constexpr uint32_t kMcm = rim_event::kSlotMachineMcm0 | rim_event::kSoutCompareMcm0 |
@@ -497,6 +517,7 @@ void Rack::publish_fans() {
 }
 
 void Rack::set_cpu_temperature(double celsius, bool publish_now) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   if (!std::isfinite(celsius) || celsius < -55.0 || celsius > 150.0)
     throw std::invalid_argument("CPU temperature must be -55..150 degC");
   cpu_temp_ = celsius;
@@ -524,6 +545,7 @@ void Rack::publish_cpu_temperature() {
 }
 
 void Rack::set_wiring_fault(uint16_t module, size_t channel, WiringFault fault) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (!d->detects_wiring_faults())
@@ -542,6 +564,7 @@ void Rack::set_wiring_fault(uint16_t module, size_t channel, WiringFault fault) 
 }
 
 void Rack::set_sensor_open(uint16_t module, size_t channel, bool open) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (!d->has_sensor_break())
@@ -555,6 +578,7 @@ void Rack::set_sensor_open(uint16_t module, size_t channel, bool open) {
 }
 
 void Rack::set_output_fault(uint16_t module, size_t channel, bool overload, bool overtemperature) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (channel >= d->outputs().size())
@@ -566,6 +590,7 @@ void Rack::set_output_fault(uint16_t module, size_t channel, bool overload, bool
 }
 
 void Rack::set_encoder_fault(uint16_t module, EncoderFault fault, bool active, int64_t jump_steps) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   auto* e = dynamic_cast<EncoderDriver*>(driver(module));
   if (e == nullptr) {
     throw std::invalid_argument(fmt::format("module {} is not an encoder card", module));
@@ -574,6 +599,7 @@ void Rack::set_encoder_fault(uint16_t module, EncoderFault fault, bool active, i
 }
 
 void Rack::set_loop_ohms(uint16_t module, size_t channel, double ohms) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (!d->card().thermocouple_ohms)
@@ -590,6 +616,7 @@ void Rack::set_loop_ohms(uint16_t module, size_t channel, double ohms) {
 
 void Rack::set_source(uint16_t module, size_t channel, std::string_view kind,
                       const SourceParams& params, std::unique_ptr<Source> prebuilt) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (channel >= d->inputs().size()) {
@@ -677,6 +704,7 @@ SourceContext Rack::source_context() {
 }
 
 void Rack::sample_inputs(uint16_t module) {
+  device_.disturb();  // outside the cycle: the next one runs in full
   CardDriver* d = driver(module);
   if (d != nullptr && module_online(module - 1u)) {
     d->write_inputs(now() - t0_, options_.cycle_time_s);
@@ -699,6 +727,7 @@ void Rack::update_inputs(size_t i, double t, double dt) {
 }
 
 void Rack::refresh() {
+  device_.disturb();  // outside the cycle: the next one runs in full
   if (state_ != EsmState::SafeOp && state_ != EsmState::Op) {
     // No process data runs: sample the inputs here so SDO reads and `ctl list` are live.
     const double t = now();

@@ -100,6 +100,7 @@ class Rack : public mdp::CycleListener {
   // --- CycleListener (device thread).
   void on_outputs(mdp::Device&) override;
   void before_inputs(mdp::Device&) override;
+  bool repeats_cycle() const override;
   // The device's own clock, independent of process data (call about once a second on the
   // device thread, in every ESM state): the 30 s CPU temperature reading (guide §4.8) and any
   // pending exception-tree update.
@@ -178,6 +179,7 @@ class Rack : public mdp::CycleListener {
   EsmState state_ = EsmState::Init;
   bool outputs_valid_ = false;
   bool dirty_ = true;
+  bool settled_ = false;           // the last full cycle would repeat itself (repeats_cycle)
   bool fault_error_seen_ = false;  // a RIM went to ERROR for a wiring fault once
   // The cyclic walk over the modules: each one's driver and rims_[its RIM].state == Online,
   // kept by set_rim_state (one array instead of the drivers, the module -> RIM map and the

@@ -1,0 +1,106 @@
+// Cycles that repeat the last one (issue 16): a master that sends the same output data every
+// cycle, to a device whose inputs depend on nothing but that data, gets the same input data
+// back every cycle. Running every card, the exception tree and the process image for it costs
+// a line of devices per slave what a round through all of that touches; comparing the output
+// data costs a few bytes.
+//
+// The rule, in the order the device sees a cycle (Device::write_outputs, then read_inputs):
+//   - a full cycle records its output data and the input data it produced;
+//   - the device has settled when a full cycle had the previous full cycle's output data,
+//     produced its input data again, nothing outside the cycle touched the device meanwhile
+//     (disturb()) and every cycle listener says a repeat would change nothing
+//     (CycleListener::repeats_cycle);
+//   - a settled device skips a cycle whose output data is the recorded one, as long as nothing
+//     disturbed it and every listener still agrees (a timer of its own may be due): the SM3
+//     image is the one the firmware handed over already (ecat::Application::update_inputs
+//     answers false, so the master reads the same buffer, ETG.1000.4 §6.7.2).
+// Whatever reads or changes the device from outside the cycle (a mailbox request, an ESM
+// transition, SYNC, the watchdog, the control API, a RIM link) calls disturb() first, so the
+// next cycle runs in full. No allocation after arm().
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace rackcat::mdp {
+
+class RepeatedCycles {
+ public:
+  // The process data starts (entering SAFEOP, not the cyclic path): its sizes, and whether a
+  // cycle can repeat at all (`possible`: no mapped object runs a process-data hook, no mapped
+  // entry holds a time).
+  void arm(size_t output_bytes, size_t input_bytes, bool possible) {
+    outputs_.assign(output_bytes, 0);
+    inputs_.assign(input_bytes, 0);
+    possible_ = possible;
+    recorded_ = false;
+    settled_ = false;
+    ++disturbances_;
+  }
+  // Something outside the cycle is about to read or change the device.
+  void disturb() { ++disturbances_; }
+
+  // write_outputs: true when this cycle repeats the last one and may be skipped (then the
+  // next inputs_wanted() answers false). `repeats` asks the listeners.
+  template <class Repeats>
+  bool skip_outputs(std::span<const uint8_t> sm2, Repeats&& repeats) {
+    if (settled_ && settled_at_ == disturbances_ && same(sm2, outputs_) && repeats()) {
+      skipping_ = true;
+      return true;
+    }
+    settled_ = false;
+    skipping_ = false;
+    full_ = true;
+    cycle_start_ = disturbances_;
+    outputs_repeated_ = recorded_ && same(sm2, outputs_);
+    if (!outputs_repeated_ && sm2.size() == outputs_.size()) {
+      std::copy(sm2.begin(), sm2.end(), outputs_.begin());
+    }
+    return false;
+  }
+  // read_inputs: false when this cycle's write_outputs skipped it (the SM3 image stands).
+  bool inputs_wanted() {
+    if (!skipping_) return true;
+    skipping_ = false;
+    return false;
+  }
+  // read_inputs, after a full cycle packed `sm3`: records it and decides whether the device
+  // has settled. `repeats` asks the listeners.
+  template <class Repeats>
+  void inputs_made(std::span<const uint8_t> sm3, Repeats&& repeats) {
+    const bool inputs_repeated = recorded_ && same(sm3, inputs_);
+    if (!inputs_repeated && sm3.size() == inputs_.size()) {
+      std::copy(sm3.begin(), sm3.end(), inputs_.begin());
+    }
+    const bool sizes = sm3.size() == inputs_.size() && outputs_.size() != 0;
+    settled_ = full_ && possible_ && outputs_repeated_ && inputs_repeated &&
+               cycle_start_ == disturbances_ && repeats();
+    settled_at_ = disturbances_;
+    recorded_ = full_ && sizes;
+    full_ = false;
+  }
+  bool settled() const { return settled_ && settled_at_ == disturbances_; }
+
+ private:
+  static bool same(std::span<const uint8_t> a, const std::vector<uint8_t>& b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin());
+  }
+
+  // What a repeated cycle reads first.
+  bool settled_ = false;
+  bool skipping_ = false;
+  bool full_ = false;              // this cycle's write_outputs ran in full
+  bool outputs_repeated_ = false;  // ... with the recorded output data
+  bool recorded_ = false;          // outputs_ and inputs_ hold a full cycle's data
+  bool possible_ = false;
+  uint64_t disturbances_ = 0;
+  uint64_t settled_at_ = 0;
+  uint64_t cycle_start_ = 0;
+  std::vector<uint8_t> outputs_;
+  std::vector<uint8_t> inputs_;
+};
+
+}  // namespace rackcat::mdp

@@ -1,0 +1,159 @@
+// A master that repeats its output data gets the same inputs without a round through the
+// cards (mdp/repeated_cycles.hpp, issue 16), and still sees at once everything that changes
+// them in between: new output data, a control command, a dictionary write, a time-varying
+// source, the rack's own 30 s CPU temperature reading, the input latch time 0xF6F0.
+// Driven the way the firmware drives the device: one SM2 and one SM3 buffer kept across
+// cycles, SM3 written only when read_inputs() packed it (ecat/slave/process_data.cpp).
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdint>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "rack_fixture.hpp"
+
+using namespace rackcat;
+using namespace rackcat::modules;
+
+namespace {
+
+// examples/tiny-rack.yaml: an 8-channel relay card wired back to an 8-channel input card.
+constexpr const char* kTinyRack = R"(
+control_module:
+  part_number: FI-CM0600-00
+rims:
+  - rim: 1
+    type: 6-slot
+    slots:
+      - {slot: 1, card: CRS-10}
+      - {slot: 2, card: CDI-13, loopback: {rim: 1, slot: 1}}
+)";
+
+class RepeatedCycleTest : public ::testing::Test {
+ protected:
+  RepeatedCycleTest()
+      : device(mdp::parse_rack_config(kTinyRack, "tiny.yaml"), modules::testing::device_options()),
+        rack(device, modules::testing::rack_options(&clock)) {
+    device.state_changed(EsmState::Init, EsmState::PreOp);
+    device.state_changed(EsmState::PreOp, EsmState::SafeOp);
+    device.state_changed(EsmState::SafeOp, EsmState::Op);
+    sm2.assign(device.output_bytes(), 0);
+    sm3.assign(device.input_bytes(), 0);
+  }
+
+  // One cycle of 1 ms with `word` as the relay card's output data: true when the device
+  // packed the inputs (a full cycle), false when it skipped a repeated one.
+  bool cycle(uint8_t word) {
+    clock += 0.001;
+    sm2[0] = word;
+    device.write_outputs(sm2);
+    return device.read_inputs(sm3);
+  }
+  // Cycles with `word` until the device skips one (at most 5): the number of full ones.
+  int settle(uint8_t word) {
+    for (int full = 0; full < 5; ++full) {
+      if (!cycle(word)) return full;
+    }
+    return -1;
+  }
+  CardDriver& relay() { return *rack.driver_at(1, 1); }
+  CardDriver& inputs() { return *rack.driver_at(1, 2); }
+
+  double clock = 0.0;
+  mdp::Device device;
+  Rack rack;
+  std::vector<uint8_t> sm2, sm3;
+};
+
+}  // namespace
+
+TEST_F(RepeatedCycleTest, RepeatedOutputsAreAnsweredFromTheLastInputsOnceTwoCyclesAgree) {
+  ASSERT_EQ(sm2.size(), 1u);
+  ASSERT_EQ(sm3.size(), 1u);
+  EXPECT_TRUE(cycle(0x5A));
+  EXPECT_EQ(sm3[0], 0x5A);   // the loopback within the cycle
+  EXPECT_TRUE(cycle(0x5A));  // the second full cycle finds the first one's inputs again
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_FALSE(cycle(0x5A)) << "cycle " << i;
+    EXPECT_EQ(sm3[0], 0x5A);
+  }
+  // New output data: a full cycle at once, its loopback in the same cycle.
+  EXPECT_TRUE(cycle(0xA5));
+  EXPECT_EQ(sm3[0], 0xA5);
+  EXPECT_EQ(settle(0xA5), 1);
+  EXPECT_EQ(sm3[0], 0xA5);
+}
+
+TEST_F(RepeatedCycleTest, AControlCommandBetweenRepeatsIsSeenOnTheNextCycle) {
+  ASSERT_EQ(settle(0xFE), 2);
+  EXPECT_EQ(sm3[0], 0xFE);
+  // `rackcat ctl source`: input 0 reads a constant 1 instead of the relay's open contact.
+  rack.set_source(inputs().module().number, 0, "constant", {{"value", "1"}});
+  EXPECT_TRUE(cycle(0xFE));
+  EXPECT_EQ(sm3[0], 0xFF);
+  ASSERT_GE(settle(0xFE), 1);
+  // ...and input 1 a constant 0 although its relay contact is closed.
+  rack.set_source(inputs().module().number, 1, "constant", {{"value", "0"}});
+  EXPECT_TRUE(cycle(0xFE));
+  EXPECT_EQ(sm3[0], 0xFD);
+  ASSERT_GE(settle(0xFE), 1);
+  EXPECT_EQ(sm3[0], 0xFD);
+}
+
+TEST_F(RepeatedCycleTest, ARimLostBetweenRepeatsReadsItsSubstitutesOnTheNextCycle) {
+  ASSERT_EQ(settle(0x0F), 2);
+  rack.set_rim_state(1, RimState::Offline);
+  EXPECT_TRUE(cycle(0x0F));
+  EXPECT_EQ(sm3[0], 0x00);
+  rack.set_rim_state(1, RimState::Online);
+  EXPECT_TRUE(cycle(0x0F));
+  EXPECT_EQ(sm3[0], 0x0F);
+}
+
+TEST_F(RepeatedCycleTest, AWriteThroughTheDictionaryBetweenRepeatsIsUndoneByTheNextCycle) {
+  ASSERT_EQ(settle(0x33), 2);
+  // Whoever takes the mutable dictionary (the SDO server, the control API) may change what
+  // the cycle packs: here the input object itself, which the next cycle samples again.
+  coe::Object* din = device.dictionary().find(inputs().module().index(0x6000, 0x1));
+  ASSERT_NE(din, nullptr);
+  din->set_u(1, 0x00);
+  EXPECT_TRUE(cycle(0x33));
+  EXPECT_EQ(sm3[0], 0x33);
+}
+
+TEST_F(RepeatedCycleTest, LeavingOpAndComingBackRunsInFull) {
+  ASSERT_EQ(settle(0x81), 2);
+  device.state_changed(EsmState::Op, EsmState::SafeOp);
+  device.state_changed(EsmState::SafeOp, EsmState::Op);
+  // The relay drives its substitute (0) until the first valid output data in OP.
+  EXPECT_TRUE(cycle(0x81));
+  EXPECT_EQ(sm3[0], 0x81);
+}
+
+TEST_F(RepeatedCycleTest, ATimeVaryingSourceNeverRepeats) {
+  rack.set_source(inputs().module().number, 3, "sine",
+                  {{"amplitude", "1"}, {"frequency", "50"}, {"offset", "0.5"}});
+  for (int i = 0; i < 20; ++i) EXPECT_TRUE(cycle(0x01)) << "cycle " << i;
+}
+
+TEST_F(RepeatedCycleTest, TheRacksThirtySecondCpuTemperatureStillPublishes) {
+  rack.set_cpu_temperature(55.0, false);  // read by the next 30 s publication
+  ASSERT_GE(settle(0x01), 1);
+  ASSERT_NE(rack.cpu_temperature_published(), 55.0);
+  clock += 31.0;
+  EXPECT_TRUE(cycle(0x01));
+  EXPECT_EQ(rack.cpu_temperature_published(), 55.0);
+}
+
+TEST_F(RepeatedCycleTest, TheInputLatchTimeFollowsRepeatedCycles) {
+  const coe::Object* latch = std::as_const(device).dictionary().find(0xF6F0);
+  ASSERT_NE(latch, nullptr);
+  ASSERT_EQ(settle(0x01), 2);
+  const uint64_t before = std::as_const(device).dictionary().find(0xF6F0)->get_u(1);
+  std::this_thread::sleep_for(std::chrono::milliseconds(3));
+  EXPECT_FALSE(cycle(0x01));
+  // The latch time of the skipped cycle, at least 3 ms after the last full one.
+  EXPECT_GE(std::as_const(device).dictionary().find(0xF6F0)->get_u(1), before + 3000);
+}
