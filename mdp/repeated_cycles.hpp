@@ -19,11 +19,13 @@
 // next cycle runs in full. No allocation after arm().
 #pragma once
 
-#include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
+
+#include "base/short_copy.hpp"
 
 namespace rackcat::mdp {
 
@@ -33,9 +35,12 @@ class RepeatedCycles {
   // cycle can repeat at all (`possible`: no mapped object runs a process-data hook, no mapped
   // entry holds a time).
   void arm(size_t output_bytes, size_t input_bytes, bool possible) {
-    outputs_.assign(output_bytes, 0);
-    inputs_.assign(input_bytes, 0);
-    possible_ = possible;
+    const size_t total = output_bytes + input_bytes;
+    heap_.assign(total > kInline ? total : 0, 0);
+    uint8_t* const data = total > kInline ? heap_.data() : inline_.data();
+    outputs_ = std::span<uint8_t>(data, output_bytes);
+    inputs_ = std::span<uint8_t>(data + output_bytes, input_bytes);
+    possible_ = possible && output_bytes != 0;
     recorded_ = false;
     settled_ = false;
     ++disturbances_;
@@ -55,9 +60,10 @@ class RepeatedCycles {
     skipping_ = false;
     full_ = true;
     cycle_start_ = disturbances_;
-    outputs_repeated_ = recorded_ && same(sm2, outputs_);
-    if (!outputs_repeated_ && sm2.size() == outputs_.size()) {
-      std::copy(sm2.begin(), sm2.end(), outputs_.begin());
+    outputs_repeated_ = false;
+    if (possible_ && sm2.size() == outputs_.size()) {
+      outputs_repeated_ = recorded_ && same(sm2, outputs_);
+      if (!outputs_repeated_) base::copy_bytes(outputs_.data(), sm2.data(), sm2.size());
     }
     return false;
   }
@@ -68,39 +74,44 @@ class RepeatedCycles {
     return false;
   }
   // read_inputs, after a full cycle packed `sm3`: records it and decides whether the device
-  // has settled. `repeats` asks the listeners.
+  // has settled. `repeats` asks the listeners, only when the cycle repeated the last one.
   template <class Repeats>
   void inputs_made(std::span<const uint8_t> sm3, Repeats&& repeats) {
-    const bool inputs_repeated = recorded_ && same(sm3, inputs_);
-    if (!inputs_repeated && sm3.size() == inputs_.size()) {
-      std::copy(sm3.begin(), sm3.end(), inputs_.begin());
+    const bool recording = full_ && possible_ && sm3.size() == inputs_.size();
+    bool inputs_repeated = false;
+    if (recording) {
+      inputs_repeated = recorded_ && same(sm3, inputs_);
+      if (!inputs_repeated) base::copy_bytes(inputs_.data(), sm3.data(), sm3.size());
     }
-    const bool sizes = sm3.size() == inputs_.size() && outputs_.size() != 0;
-    settled_ = full_ && possible_ && outputs_repeated_ && inputs_repeated &&
-               cycle_start_ == disturbances_ && repeats();
+    settled_ = recording && outputs_repeated_ && inputs_repeated && cycle_start_ == disturbances_ &&
+               repeats();
     settled_at_ = disturbances_;
-    recorded_ = full_ && sizes;
+    recorded_ = recording;
     full_ = false;
   }
   bool settled() const { return settled_ && settled_at_ == disturbances_; }
 
  private:
-  static bool same(std::span<const uint8_t> a, const std::vector<uint8_t>& b) {
-    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin());
+  static constexpr size_t kInline = 16;  // output + input bytes kept in place (a tiny device)
+  static bool same(std::span<const uint8_t> a, std::span<const uint8_t> b) {
+    return a.size() == b.size() && base::same_bytes(a.data(), b.data(), a.size());
   }
 
-  // What a repeated cycle reads first.
+  // What a repeated cycle reads first (its owner keeps it next to what every cycle reads).
   bool settled_ = false;
   bool skipping_ = false;
   bool full_ = false;              // this cycle's write_outputs ran in full
   bool outputs_repeated_ = false;  // ... with the recorded output data
-  bool recorded_ = false;          // outputs_ and inputs_ hold a full cycle's data
+  bool recorded_ = false;          // outputs_ and inputs_ hold the last full cycle's data
   bool possible_ = false;
   uint64_t disturbances_ = 0;
   uint64_t settled_at_ = 0;
+  std::span<uint8_t> outputs_;
+  std::array<uint8_t, kInline> inline_{};  // the recorded images of a tiny device
+  // What only a full cycle reads.
   uint64_t cycle_start_ = 0;
-  std::vector<uint8_t> outputs_;
-  std::vector<uint8_t> inputs_;
+  std::span<uint8_t> inputs_;
+  std::vector<uint8_t> heap_;  // the recorded images when they do not fit in place
 };
 
 }  // namespace rackcat::mdp

@@ -82,6 +82,7 @@ Rack::Rack(mdp::Device& device, RackOptions options)
     if (auto* e = dynamic_cast<EncoderDriver*>(drivers_[m.number - 1].get())) e->attach(device_);
     if (drivers_[m.number - 1]->detects_wiring_faults()) fault_drivers_.push_back(m.number - 1);
   }
+  uart_cards_ = !uarts_.empty();
   channel_diag_.emplace(device_, drivers_);
 
   // A replay file is read below the rack file's own directory (mdp::FileRoot: no "..", no
@@ -239,16 +240,23 @@ void Rack::before_inputs(mdp::Device&) {
   }
   // Whether the next cycle with the same outputs would do all of this again to the same end
   // (mdp/repeated_cycles.hpp): no exception changed now, no plant steps with time, no UART
-  // queue fills from its terminal, and every card follows only the outputs and constant or
-  // looped-back sources. Control commands and RIM links call device_.disturb() first.
-  settled_ = !tree_changed && state_ == EsmState::Op && plants_.empty() && uarts_.empty() &&
-             std::all_of(cycle_.begin(), cycle_.end(),
-                         [](const CycleCard& c) { return c.driver->time_invariant(); });
+  // queue fills from its terminal; the cards are asked in repeats_cycle(), only when the
+  // device could repeat. Control commands and RIM links call device_.disturb() first.
+  settled_ = !tree_changed && state_ == EsmState::Op && plants_.empty() && !uart_cards_;
+  cards_checked_ = false;
 }
 
 bool Rack::repeats_cycle() const {
+  if (!settled_) return false;
+  // Every card follows only the outputs and constant or looped-back sources; asked once per
+  // full cycle (a source changes only through set_source, which disturbs the device).
+  if (!cards_checked_) {
+    cards_invariant_ = std::all_of(cycle_.begin(), cycle_.end(),
+                                   [](const CycleCard& c) { return c.driver->time_invariant(); });
+    cards_checked_ = true;
+  }
   // The 30 s CPU temperature reading (guide §4.8) is the rack's own timer.
-  return settled_ && now() < cpu_next_publish_;
+  return cards_invariant_ && now() < cpu_next_publish_;
 }
 
 void Rack::on_clock() {

@@ -179,7 +179,10 @@ class Rack : public mdp::CycleListener {
   EsmState state_ = EsmState::Init;
   bool outputs_valid_ = false;
   bool dirty_ = true;
-  bool settled_ = false;           // the last full cycle would repeat itself (repeats_cycle)
+  bool settled_ = false;                  // the last full cycle would repeat itself (repeats_cycle)
+  mutable bool cards_checked_ = false;    // cards_invariant_ holds since the last full cycle
+  mutable bool cards_invariant_ = false;  // every card is time_invariant()
+  bool uart_cards_ = false;        // a UART card: its queues fill from terminals, never settled
   bool fault_error_seen_ = false;  // a RIM went to ERROR for a wiring fault once
   // The cyclic walk over the modules: each one's driver and rims_[its RIM].state == Online,
   // kept by set_rim_state (one array instead of the drivers, the module -> RIM map and the

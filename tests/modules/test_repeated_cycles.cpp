@@ -51,7 +51,8 @@ class RepeatedCycleTest : public ::testing::Test {
     device.write_outputs(sm2);
     return device.read_inputs(sm3);
   }
-  // Cycles with `word` until the device skips one (at most 5): the number of full ones.
+  // Cycles with `word` until the device skips one (at most 5): the number of full ones, -1
+  // when none was skipped.
   int settle(uint8_t word) {
     for (int full = 0; full < 5; ++full) {
       if (!cycle(word)) return full;
@@ -69,12 +70,17 @@ class RepeatedCycleTest : public ::testing::Test {
 
 }  // namespace
 
-TEST_F(RepeatedCycleTest, RepeatedOutputsAreAnsweredFromTheLastInputsOnceTwoCyclesAgree) {
+TEST_F(RepeatedCycleTest, RepeatedOutputsAreAnsweredFromTheLastInputsOnceTwoFullCyclesAgree) {
   ASSERT_EQ(sm2.size(), 1u);
   ASSERT_EQ(sm3.size(), 1u);
   EXPECT_TRUE(cycle(0x5A));
-  EXPECT_EQ(sm3[0], 0x5A);   // the loopback within the cycle
-  EXPECT_TRUE(cycle(0x5A));  // the second full cycle finds the first one's inputs again
+  EXPECT_EQ(sm3[0], 0x5A);  // the loopback within the cycle
+  // The next full cycle finds the recorded outputs and inputs again and settles (one more
+  // when the first cycle in OP also updated the exception tree).
+  const int full = settle(0x5A);
+  EXPECT_GE(full, 1);
+  EXPECT_LE(full, 2);
+  EXPECT_EQ(sm3[0], 0x5A);
   for (int i = 0; i < 10; ++i) {
     EXPECT_FALSE(cycle(0x5A)) << "cycle " << i;
     EXPECT_EQ(sm3[0], 0x5A);
@@ -87,7 +93,7 @@ TEST_F(RepeatedCycleTest, RepeatedOutputsAreAnsweredFromTheLastInputsOnceTwoCycl
 }
 
 TEST_F(RepeatedCycleTest, AControlCommandBetweenRepeatsIsSeenOnTheNextCycle) {
-  ASSERT_EQ(settle(0xFE), 2);
+  ASSERT_GE(settle(0xFE), 2);
   EXPECT_EQ(sm3[0], 0xFE);
   // `rackcat ctl source`: input 0 reads a constant 1 instead of the relay's open contact.
   rack.set_source(inputs().module().number, 0, "constant", {{"value", "1"}});
@@ -103,7 +109,7 @@ TEST_F(RepeatedCycleTest, AControlCommandBetweenRepeatsIsSeenOnTheNextCycle) {
 }
 
 TEST_F(RepeatedCycleTest, ARimLostBetweenRepeatsReadsItsSubstitutesOnTheNextCycle) {
-  ASSERT_EQ(settle(0x0F), 2);
+  ASSERT_GE(settle(0x0F), 2);
   rack.set_rim_state(1, RimState::Offline);
   EXPECT_TRUE(cycle(0x0F));
   EXPECT_EQ(sm3[0], 0x00);
@@ -113,7 +119,7 @@ TEST_F(RepeatedCycleTest, ARimLostBetweenRepeatsReadsItsSubstitutesOnTheNextCycl
 }
 
 TEST_F(RepeatedCycleTest, AWriteThroughTheDictionaryBetweenRepeatsIsUndoneByTheNextCycle) {
-  ASSERT_EQ(settle(0x33), 2);
+  ASSERT_GE(settle(0x33), 2);
   // Whoever takes the mutable dictionary (the SDO server, the control API) may change what
   // the cycle packs: here the input object itself, which the next cycle samples again.
   coe::Object* din = device.dictionary().find(inputs().module().index(0x6000, 0x1));
@@ -124,7 +130,7 @@ TEST_F(RepeatedCycleTest, AWriteThroughTheDictionaryBetweenRepeatsIsUndoneByTheN
 }
 
 TEST_F(RepeatedCycleTest, LeavingOpAndComingBackRunsInFull) {
-  ASSERT_EQ(settle(0x81), 2);
+  ASSERT_GE(settle(0x81), 2);
   device.state_changed(EsmState::Op, EsmState::SafeOp);
   device.state_changed(EsmState::SafeOp, EsmState::Op);
   // The relay drives its substitute (0) until the first valid output data in OP.
@@ -150,7 +156,7 @@ TEST_F(RepeatedCycleTest, TheRacksThirtySecondCpuTemperatureStillPublishes) {
 TEST_F(RepeatedCycleTest, TheInputLatchTimeFollowsRepeatedCycles) {
   const coe::Object* latch = std::as_const(device).dictionary().find(0xF6F0);
   ASSERT_NE(latch, nullptr);
-  ASSERT_EQ(settle(0x01), 2);
+  ASSERT_GE(settle(0x01), 2);
   const uint64_t before = std::as_const(device).dictionary().find(0xF6F0)->get_u(1);
   std::this_thread::sleep_for(std::chrono::milliseconds(3));
   EXPECT_FALSE(cycle(0x01));
