@@ -59,7 +59,8 @@ constexpr uint16_t kAlInvalidInputConfig = 0x001E;
 
 }  // namespace
 
-struct Device::Impl final : DeviceRuntime {
+// On a cache line boundary: its first line holds what every cycle reads (issue 16).
+struct alignas(64) Device::Impl final : DeviceRuntime {
   Impl() = default;
   // A reset job queued on the worker writes reset_firmware (a member destroyed before the
   // writer): finish every queued job before any member goes (shutdown only, not the device
@@ -82,7 +83,8 @@ struct Device::Impl final : DeviceRuntime {
   }
   // --- What write_outputs/read_inputs touch, side by side (issue 16: the cyclic path of a
   // line of devices is bound by cache misses, not instructions).
-  // A cycle that repeats the last one is skipped (mdp/repeated_cycles.hpp): read first.
+  // A cycle that repeats the last one is skipped (mdp/repeated_cycles.hpp): on the first line,
+  // with the vtable pointer, `self` and the mailbox hint that every frame reads.
   RepeatedCycles repeats;
   // A skipped cycle still latches the inputs (0xF6F0, not mapped when cycles repeat): its time
   // goes into the objects when anything outside the cycle next looks (disturb(), dictionary()),
@@ -140,6 +142,7 @@ struct Device::Impl final : DeviceRuntime {
   bool reset_factory = false;  // the 0xFBF0 command the worker executes is a factory reset
   std::chrono::steady_clock::time_point last_sync_at{};
   coe::diag::History history{kDiagnosisMessages};
+  std::vector<uint8_t> repeat_images;     // repeats' recorded images that do not fit in place
   std::vector<uint8_t> enumerated;        // per module: enumerated now (module_enumeration.hpp)
   std::vector<CycleListener*> listeners;  // every listener, in the order they were added
   template <class F>
@@ -175,7 +178,7 @@ struct Device::Impl final : DeviceRuntime {
     for (const uint16_t index : {uint16_t{0xF6F0}, uint16_t{0xF6F2}}) {
       if (const Object* o = od.find(index); o != nullptr && image->maps_input(*o)) possible = false;
     }
-    repeats.arm(image->output_bytes(), image->input_bytes(), possible);
+    repeats.arm(image->output_bytes(), image->input_bytes(), possible, repeat_images);
   }
 
   // --- stored parameters -------------------------------------------------------------------

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <array>
+#include <climits>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -29,18 +30,27 @@
 
 namespace rackcat::mdp {
 
+// 40 bytes: its owner keeps it on the cache line every cycle reads anyway (mdp::Device).
 class RepeatedCycles {
  public:
   // The process data starts (entering SAFEOP, not the cyclic path): its sizes, and whether a
   // cycle can repeat at all (`possible`: no mapped object runs a process-data hook, no mapped
-  // entry holds a time).
-  void arm(size_t output_bytes, size_t input_bytes, bool possible) {
+  // entry holds a time). Images that do not fit in place are recorded in `spill`, which the
+  // owner keeps until the next arm().
+  void arm(size_t output_bytes, size_t input_bytes, bool possible, std::vector<uint8_t>& spill) {
     const size_t total = output_bytes + input_bytes;
-    heap_.assign(total > kInline ? total : 0, 0);
-    uint8_t* const data = total > kInline ? heap_.data() : inline_.data();
-    outputs_ = std::span<uint8_t>(data, output_bytes);
-    inputs_ = std::span<uint8_t>(data + output_bytes, input_bytes);
-    possible_ = possible && output_bytes != 0;
+    if (total > kInline) {
+      spill.assign(total, 0);
+      images_ = spill.data();
+    } else {
+      spill.clear();
+      images_ = inline_.data();
+    }
+    // SyncManager lengths are 16-bit (ETG.1000.4 §6.7.1): larger sizes never repeat.
+    possible_ =
+        possible && output_bytes != 0 && output_bytes <= UINT16_MAX && input_bytes <= UINT16_MAX;
+    output_bytes_ = possible_ ? static_cast<uint16_t>(output_bytes) : 0;
+    input_bytes_ = possible_ ? static_cast<uint16_t>(input_bytes) : 0;
     recorded_ = false;
     settled_ = false;
     ++disturbances_;
@@ -52,7 +62,8 @@ class RepeatedCycles {
   // next inputs_wanted() answers false). `repeats` asks the listeners.
   template <class Repeats>
   bool skip_outputs(std::span<const uint8_t> sm2, Repeats&& repeats) {
-    if (settled_ && settled_at_ == disturbances_ && same(sm2, outputs_) && repeats()) {
+    if (settled_ && settled_at_ == disturbances_ && same(sm2, images_, output_bytes_) &&
+        repeats()) {
       skipping_ = true;
       return true;
     }
@@ -61,9 +72,9 @@ class RepeatedCycles {
     full_ = true;
     cycle_start_ = disturbances_;
     outputs_repeated_ = false;
-    if (possible_ && sm2.size() == outputs_.size()) {
-      outputs_repeated_ = recorded_ && same(sm2, outputs_);
-      if (!outputs_repeated_) base::copy_bytes(outputs_.data(), sm2.data(), sm2.size());
+    if (possible_ && sm2.size() == output_bytes_) {
+      outputs_repeated_ = recorded_ && same(sm2, images_, output_bytes_);
+      if (!outputs_repeated_) base::copy_bytes(images_, sm2.data(), sm2.size());
     }
     return false;
   }
@@ -77,11 +88,12 @@ class RepeatedCycles {
   // has settled. `repeats` asks the listeners, only when the cycle repeated the last one.
   template <class Repeats>
   void inputs_made(std::span<const uint8_t> sm3, Repeats&& repeats) {
-    const bool recording = full_ && possible_ && sm3.size() == inputs_.size();
+    const bool recording = full_ && possible_ && sm3.size() == input_bytes_;
     bool inputs_repeated = false;
     if (recording) {
-      inputs_repeated = recorded_ && same(sm3, inputs_);
-      if (!inputs_repeated) base::copy_bytes(inputs_.data(), sm3.data(), sm3.size());
+      uint8_t* const inputs = images_ + output_bytes_;
+      inputs_repeated = recorded_ && same(sm3, inputs, input_bytes_);
+      if (!inputs_repeated) base::copy_bytes(inputs, sm3.data(), sm3.size());
     }
     settled_ = recording && outputs_repeated_ && inputs_repeated && cycle_start_ == disturbances_ &&
                repeats();
@@ -92,26 +104,27 @@ class RepeatedCycles {
   bool settled() const { return settled_ && settled_at_ == disturbances_; }
 
  private:
-  static constexpr size_t kInline = 16;  // output + input bytes kept in place (a tiny device)
-  static bool same(std::span<const uint8_t> a, std::span<const uint8_t> b) {
-    return a.size() == b.size() && base::same_bytes(a.data(), b.data(), a.size());
+  static constexpr size_t kInline = 8;  // output + input bytes recorded in place (a tiny device)
+  static bool same(std::span<const uint8_t> a, const uint8_t* b, size_t n) {
+    return a.size() == n && base::same_bytes(a.data(), b, n);
   }
 
-  // What a repeated cycle reads first (its owner keeps it next to what every cycle reads).
   bool settled_ = false;
   bool skipping_ = false;
   bool full_ = false;              // this cycle's write_outputs ran in full
   bool outputs_repeated_ = false;  // ... with the recorded output data
-  bool recorded_ = false;          // outputs_ and inputs_ hold the last full cycle's data
+  bool recorded_ = false;          // the images hold the last full cycle's data
   bool possible_ = false;
-  uint64_t disturbances_ = 0;
-  uint64_t settled_at_ = 0;
-  std::span<uint8_t> outputs_;
-  std::array<uint8_t, kInline> inline_{};  // the recorded images of a tiny device
-  // What only a full cycle reads.
-  uint64_t cycle_start_ = 0;
-  std::span<uint8_t> inputs_;
-  std::vector<uint8_t> heap_;  // the recorded images when they do not fit in place
+  uint16_t output_bytes_ = 0;
+  // Counted modulo 2^32: a wrong "nothing happened" would need exactly 2^32 disturbances
+  // between two cycles.
+  uint32_t disturbances_ = 0;
+  uint32_t settled_at_ = 0;
+  uint32_t cycle_start_ = 0;
+  uint16_t input_bytes_ = 0;
+  uint8_t* images_ = inline_.data();  // the recorded outputs, then the recorded inputs
+  std::array<uint8_t, kInline> inline_{};
 };
+static_assert(sizeof(RepeatedCycles) == 40);
 
 }  // namespace rackcat::mdp
