@@ -122,8 +122,8 @@ class RepeatedCycles {
   uint32_t settled_at_ = 0;
   uint32_t cycle_start_ = 0;
   uint16_t input_bytes_ = 0;
-  uint8_t* images_ = inline_.data();  // the recorded outputs, then the recorded inputs
   std::array<uint8_t, kInline> inline_{};
+  uint8_t* images_ = inline_.data();  // the recorded outputs, then the recorded inputs
 };
 static_assert(sizeof(RepeatedCycles) == 40);
 
