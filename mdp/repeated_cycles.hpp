@@ -7,9 +7,10 @@
 // The rule, in the order the device sees a cycle (Device::write_outputs, then read_inputs):
 //   - a full cycle records its output data and the input data it produced;
 //   - the device has settled when a full cycle had the previous full cycle's output data,
-//     produced its input data again, nothing outside the cycle touched the device meanwhile
-//     (disturb()) and every cycle listener says a repeat would change nothing
-//     (CycleListener::repeats_cycle);
+//     produced its input data again, nothing outside the cycle touched the device during
+//     either of them or between them (disturb()), and every cycle listener says a repeat would
+//     change nothing (CycleListener::repeats_cycle): after a change or a disturbance, two full
+//     cycles;
 //   - a settled device skips a cycle whose output data is the recorded one, as long as nothing
 //     disturbed it and every listener still agrees (a timer of its own may be due): the SM3
 //     image is the one the firmware handed over already (ecat::Application::update_inputs
@@ -73,7 +74,9 @@ class RepeatedCycles {
     cycle_start_ = disturbances_;
     outputs_repeated_ = false;
     if (possible_ && sm2.size() == output_bytes_) {
-      outputs_repeated_ = recorded_ && same(sm2, images_, output_bytes_);
+      // A recording made before a disturbance proves nothing about the device after it.
+      outputs_repeated_ =
+          recorded_ && settled_at_ == disturbances_ && same(sm2, images_, output_bytes_);
       if (!outputs_repeated_) base::copy_bytes(images_, sm2.data(), sm2.size());
     }
     return false;
@@ -98,7 +101,7 @@ class RepeatedCycles {
     settled_ = recording && outputs_repeated_ && inputs_repeated && cycle_start_ == disturbances_ &&
                repeats();
     settled_at_ = disturbances_;
-    recorded_ = recording;
+    recorded_ = recording && cycle_start_ == disturbances_;
     full_ = false;
   }
   bool settled() const { return settled_ && settled_at_ == disturbances_; }
@@ -113,13 +116,13 @@ class RepeatedCycles {
   bool skipping_ = false;
   bool full_ = false;              // this cycle's write_outputs ran in full
   bool outputs_repeated_ = false;  // ... with the recorded output data
-  bool recorded_ = false;          // the images hold the last full cycle's data
+  bool recorded_ = false;          // the images hold the last full cycle's data (undisturbed)
   bool possible_ = false;
   uint16_t output_bytes_ = 0;
   // Counted modulo 2^32: a wrong "nothing happened" would need exactly 2^32 disturbances
   // between two cycles.
   uint32_t disturbances_ = 0;
-  uint32_t settled_at_ = 0;
+  uint32_t settled_at_ = 0;  // disturbances_ at the end of the last full cycle
   uint32_t cycle_start_ = 0;
   uint16_t input_bytes_ = 0;
   std::array<uint8_t, kInline> inline_{};

@@ -1,7 +1,8 @@
 // A master that repeats its output data gets the same inputs without a round through the
 // cards (mdp/repeated_cycles.hpp, issue 16), and still sees at once everything that changes
-// them in between: new output data, a control command, a dictionary write, a time-varying
-// source, the rack's own 30 s CPU temperature reading, the input latch time 0xF6F0.
+// them in between: new output data, a control command, a dictionary write, an SDO request,
+// a time-varying source, the rack's own 30 s CPU temperature reading, the input latch time
+// 0xF6F0.
 // Driven the way the firmware drives the device: one SM2 and one SM3 buffer kept across
 // cycles, SM3 written only when read_inputs() packed it (ecat/slave/process_data.cpp).
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/mailbox_error.hpp"
 #include "rack_fixture.hpp"
 
 using namespace rackcat;
@@ -127,6 +129,22 @@ TEST_F(RepeatedCycleTest, AWriteThroughTheDictionaryBetweenRepeatsIsUndoneByTheN
   din->set_u(1, 0x00);
   EXPECT_TRUE(cycle(0x33));
   EXPECT_EQ(sm3[0], 0x33);
+}
+
+TEST_F(RepeatedCycleTest, AnSdoRequestBetweenRepeatsRunsTheNextCycleInFull) {
+  ASSERT_GE(settle(0x42), 2);
+  // CoE header (ETG.1000.6 §5.6.1: service 2, SDO request), initiate upload (0x40) of 0x1018:01.
+  const std::vector<uint8_t> upload = {0x00, 0x20, 0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0};
+  std::vector<uint8_t> reply(64);
+  const mailbox::Answer a = device.coe_request(upload, reply);
+  ASSERT_EQ(a.error, mailbox::Error::None);
+  ASSERT_EQ(a.length, 10u);
+  EXPECT_EQ(reply[2], 0x43);  // expedited upload response, 4 bytes
+  // The SDO server may have changed anything the cycle reads: the next one runs in full, and
+  // it takes two agreeing full cycles to settle again.
+  EXPECT_TRUE(cycle(0x42));
+  EXPECT_EQ(sm3[0], 0x42);
+  EXPECT_EQ(settle(0x42), 1);
 }
 
 TEST_F(RepeatedCycleTest, LeavingOpAndComingBackRunsInFull) {
