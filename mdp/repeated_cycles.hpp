@@ -104,7 +104,6 @@ class RepeatedCycles {
     recorded_ = recording && cycle_start_ == disturbances_;
     full_ = false;
   }
-  bool settled() const { return settled_ && settled_at_ == disturbances_; }
 
  private:
   static constexpr size_t kInline = 8;  // output + input bytes recorded in place (a tiny device)

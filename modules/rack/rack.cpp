@@ -181,7 +181,7 @@ double Rack::now() const {
 }
 
 CardDriver* Rack::driver(uint16_t module_number) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   if (module_number == 0 || module_number > drivers_.size()) return nullptr;
   return drivers_[module_number - 1].get();
 }
@@ -260,7 +260,7 @@ bool Rack::repeats_cycle() const {
 }
 
 void Rack::on_clock() {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   if (now() >= cpu_next_publish_) publish_cpu_temperature();
   if (dirty_) {
     tree_.update();
@@ -339,7 +339,7 @@ void Rack::on_detect_modules(mdp::Device& device) {
 }
 
 void Rack::enumerate(mdp::Device& device) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   const auto modules = device.modules();
   std::vector<uint8_t> present(modules.size(), 1);
   if (!detect_modules_override()) {
@@ -417,7 +417,7 @@ void log_fault(base::FaultWhat what, uint16_t module, size_t channel_or_rim, uin
 }  // namespace
 
 void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   auto it = rims_.find(rr);
   if (it == rims_.end()) throw std::invalid_argument(fmt::format("there is no RIM {}", rr));
   RimStatus& rim = it->second;
@@ -455,7 +455,7 @@ void Rack::set_rim_state(uint8_t rr, RimState state, bool comm_error) {
 }
 
 void Rack::set_fan_rpm(uint8_t rr, std::string_view zone, double rpm) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   if (!std::isfinite(rpm) || rpm < 0.0 || rpm > 100000.0)
     throw std::invalid_argument("rpm must be 0..100000");
   if (rr == 0) {
@@ -485,7 +485,7 @@ void Rack::set_fan_rpm(uint8_t rr, std::string_view zone, double rpm) {
 }
 
 void Rack::set_rim_mcm_errors(uint8_t rr, uint32_t bits) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   auto it = rims_.find(rr);
   if (it == rims_.end()) throw std::invalid_argument(fmt::format("there is no RIM {}", rr));
   constexpr uint32_t kMcm = rim_event::kSlotMachineMcm0 | rim_event::kSoutCompareMcm0 |
@@ -525,7 +525,7 @@ void Rack::publish_fans() {
 }
 
 void Rack::set_cpu_temperature(double celsius, bool publish_now) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   if (!std::isfinite(celsius) || celsius < -55.0 || celsius > 150.0)
     throw std::invalid_argument("CPU temperature must be -55..150 degC");
   cpu_temp_ = celsius;
@@ -553,7 +553,7 @@ void Rack::publish_cpu_temperature() {
 }
 
 void Rack::set_wiring_fault(uint16_t module, size_t channel, WiringFault fault) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (!d->detects_wiring_faults())
@@ -572,7 +572,7 @@ void Rack::set_wiring_fault(uint16_t module, size_t channel, WiringFault fault) 
 }
 
 void Rack::set_sensor_open(uint16_t module, size_t channel, bool open) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (!d->has_sensor_break())
@@ -586,7 +586,7 @@ void Rack::set_sensor_open(uint16_t module, size_t channel, bool open) {
 }
 
 void Rack::set_output_fault(uint16_t module, size_t channel, bool overload, bool overtemperature) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (channel >= d->outputs().size())
@@ -598,7 +598,7 @@ void Rack::set_output_fault(uint16_t module, size_t channel, bool overload, bool
 }
 
 void Rack::set_encoder_fault(uint16_t module, EncoderFault fault, bool active, int64_t jump_steps) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   auto* e = dynamic_cast<EncoderDriver*>(driver(module));
   if (e == nullptr) {
     throw std::invalid_argument(fmt::format("module {} is not an encoder card", module));
@@ -607,7 +607,7 @@ void Rack::set_encoder_fault(uint16_t module, EncoderFault fault, bool active, i
 }
 
 void Rack::set_loop_ohms(uint16_t module, size_t channel, double ohms) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (!d->card().thermocouple_ohms)
@@ -624,7 +624,7 @@ void Rack::set_loop_ohms(uint16_t module, size_t channel, double ohms) {
 
 void Rack::set_source(uint16_t module, size_t channel, std::string_view kind,
                       const SourceParams& params, std::unique_ptr<Source> prebuilt) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   CardDriver* d = driver(module);
   if (d == nullptr) throw std::invalid_argument(fmt::format("there is no module {}", module));
   if (channel >= d->inputs().size()) {
@@ -712,7 +712,7 @@ SourceContext Rack::source_context() {
 }
 
 void Rack::sample_inputs(uint16_t module) {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   CardDriver* d = driver(module);
   if (d != nullptr && module_online(module - 1u)) {
     d->write_inputs(now() - t0_, options_.cycle_time_s);
@@ -735,7 +735,7 @@ void Rack::update_inputs(size_t i, double t, double dt) {
 }
 
 void Rack::refresh() {
-  device_.disturb();  // outside the cycle: the next one runs in full
+  device_.disturb();
   if (state_ != EsmState::SafeOp && state_ != EsmState::Op) {
     // No process data runs: sample the inputs here so SDO reads and `ctl list` are live.
     const double t = now();

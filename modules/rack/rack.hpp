@@ -112,7 +112,10 @@ class Rack : public mdp::CycleListener {
   void on_parameters_loaded(mdp::Device&) override;
   void on_device_reset(mdp::Device&, bool factory) override;
 
-  // --- State and fault injection (device thread).
+  // --- State and fault injection (device thread). Every method here that can change what a
+  // cycle reads (the setters, driver(), driver_at(), refresh(), sample_inputs(), enumerate(),
+  // and on_clock() above) calls device().disturb() first, so a device that skips repeated
+  // cycles (mdp/repeated_cycles.hpp) runs the next one in full.
   mdp::Device& device() { return device_; }
   EsmState esm_state() const { return state_; }
   bool outputs_valid() const { return outputs_valid_; }

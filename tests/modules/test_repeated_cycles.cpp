@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -21,22 +22,13 @@ using namespace rackcat::modules;
 
 namespace {
 
-// examples/tiny-rack.yaml: an 8-channel relay card wired back to an 8-channel input card.
-constexpr const char* kTinyRack = R"(
-control_module:
-  part_number: FI-CM0600-00
-rims:
-  - rim: 1
-    type: 6-slot
-    slots:
-      - {slot: 1, card: CRS-10}
-      - {slot: 2, card: CDI-13, loopback: {rim: 1, slot: 1}}
-)";
-
+// examples/tiny-rack.yaml: an 8-channel relay card (RIM 1 slot 1) wired back to an 8-channel
+// input card (slot 2).
 class RepeatedCycleTest : public ::testing::Test {
  protected:
   RepeatedCycleTest()
-      : device(mdp::parse_rack_config(kTinyRack, "tiny.yaml"), modules::testing::device_options()),
+      : device(mdp::load_rack_config(std::string(RACKCAT_SOURCE_DIR) + "/examples/tiny-rack.yaml"),
+               modules::testing::device_options()),
         rack(device, modules::testing::rack_options(&clock)) {
     device.state_changed(EsmState::Init, EsmState::PreOp);
     device.state_changed(EsmState::PreOp, EsmState::SafeOp);
