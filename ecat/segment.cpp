@@ -71,8 +71,20 @@ size_t Segment::process(std::span<uint8_t> frame) {
   const uint64_t t0 = clock_.now_ns();
   if (t0 >= next_event_bound_) service_at(t0);
   uint8_t* base = frame.data();
-  bool mapped = resolve_logical(base);
-  size_t passed = 0;
+  const bool mapped = resolve_logical(base);
+  const size_t passed =
+      mapped && layout_.count == 1 && targets_[0] != nullptr && !layout_.malformed
+          ? pass_cyclic_datagram(base + layout_.offset[0], layout_.length[0], *targets_[0], t0)
+          : pass_datagrams(base, mapped, t0);
+  // A new round over every slave the frame passed (and those an unfinished round still
+  // covers), starting where the last slice stopped.
+  round_span_ = round_left_ != 0 ? std::max(round_span_, passed) : passed;
+  round_left_ = round_span_;
+  if (cursor_ >= round_span_) cursor_ = 0;
+  return frame.size();
+}
+
+size_t Segment::pass_datagrams(uint8_t* base, bool mapped, uint64_t t0) {
   for (size_t k = 0; k < slaves_.size(); ++k) {
     Slave& slave = *slaves_[k];
     Esc& esc = slave.esc();
@@ -99,15 +111,38 @@ size_t Segment::process(std::span<uint8_t> frame) {
     }
     if (layout_.malformed) esc.count_frame_error();
     // The frame has left this ESC: its firmware runs in after_frame(), once the reply is out.
-    passed = k + 1;
-    if (!esc.forwards_to_port1()) break;  // last slave, or loop closed by DL control
+    if (!esc.forwards_to_port1()) return k + 1;  // last slave, or loop closed by DL control
   }
-  // A new round over every slave the frame passed (and those an unfinished round still
-  // covers), starting where the last slice stopped.
-  round_span_ = round_left_ != 0 ? std::max(round_span_, passed) : passed;
-  round_left_ = round_span_;
-  if (cursor_ >= round_span_) cursor_ = 0;
-  return frame.size();
+  return slaves_.size();
+}
+
+size_t Segment::pass_cyclic_datagram(uint8_t* datagram, uint16_t len,
+                                     const std::vector<LogicalMap::Target>& targets, uint64_t t0) {
+  // The general loop's steps for a frame of one datagram, with what it looks up per slave and
+  // datagram held in locals: the master's cyclic frame costs this per slave on the wire.
+  const size_t n = slaves_.size();
+  const PassTimes* offsets = offsets_.data();
+  const LogicalMap::Target* target = targets.data();
+  const LogicalMap::Target* const targets_end = target + targets.size();
+  bool mapped = true;
+  for (size_t k = 0; k < n; ++k) {
+    Esc& esc = slaves_[k]->esc();
+    if (k + 1 < n) slaves_[k + 1]->esc().prefetch();
+    esc.begin_frame({t0 + offsets[k].port0_ns, t0 + offsets[k].port1_ns});
+    if (!mapped) {
+      esc.process_datagram(datagram, len);
+    } else if (target != targets_end && target->slave == k) {
+      esc.process_logical_datagram(datagram, len, target->fmmus);
+      ++target;
+      // An FMMU written through an FMMU (mapped onto 0x0600-0x06FF) makes the map stale: the
+      // rest of the line walks its own FMMUs.
+      if (fmmu_generation_ != map_generation_) mapped = false;
+    } else {
+      esc.pass_datagram(datagram);
+    }
+    if (!esc.forwards_to_port1()) return k + 1;  // last slave, or loop closed by DL control
+  }
+  return n;
 }
 
 bool Segment::resolve_logical(const uint8_t* base) {

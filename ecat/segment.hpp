@@ -169,6 +169,14 @@ class Segment {
   void rebuild_logical_map();
   // Resolves the frame's logical datagrams through the map; false when it has none.
   bool resolve_logical(const uint8_t* base);
+  // process()'s walk of the line with the frame starting at `base` (its datagrams in layout_,
+  // `mapped`: resolve_logical found logical ones), arriving at slave 0 at t0: the number of
+  // slaves it passed.
+  size_t pass_datagrams(uint8_t* base, bool mapped, uint64_t t0);
+  // The same for a frame whose only datagram is a logical one the map resolved to `targets`
+  // (the master's cyclic frame), arriving at slave 0 at t0: the slaves it passed.
+  size_t pass_cyclic_datagram(uint8_t* datagram, uint16_t len,
+                              const std::vector<LogicalMap::Target>& targets, uint64_t t0);
   const Clock& clock_;
   SegmentOptions options_;
   std::vector<std::unique_ptr<Slave>> slaves_;

@@ -28,6 +28,13 @@ answering a BRD (working counter = slave count), with RSS and thread count once 
         [--modes blocking,busy-poll] [--samples 10000] [--sdo-calls 2000]
         [--brd-slaves 64,128,256,4096] [--firmware-yield-us N] [--cycle-us 0,1000]
 
+--guest-halt-poll-ns NS (diagnosis, in a KVM guest with the cpuidle-haltpoll driver): sets
+/sys/module/haltpoll/parameters/guest_halt_poll_ns for the run and restores it afterwards.
+The guest's idle vCPU then polls up to NS before it halts, so a wake-up from the other vCPU -
+the pinger's, when a reply arrives while the responder ran elsewhere - costs no halt exit.
+The kernel's default is 200000; some VM images set 0 (every idle halts). The table's first
+line says which value was in force.
+
 Prints one table; --json FILE also writes the numbers.
 """
 import argparse
@@ -114,6 +121,17 @@ for _ in range(calls):
 m.close()
 print(failed, " ".join(map(str, t)))
 """
+
+
+HALT_POLL = Path("/sys/module/haltpoll/parameters/guest_halt_poll_ns")
+
+
+def halt_poll_ns():
+    """The guest's halt-poll window in ns, or None when the haltpoll driver is not loaded."""
+    try:
+        return int(HALT_POLL.read_text())
+    except (OSError, ValueError):
+        return None
 
 
 def proc_status(pid):
@@ -315,6 +333,8 @@ def main():
                     help="rackcat run --firmware-yield-us (0 = off, rackcat's default)")
     ap.add_argument("--cycle-us", default="0",
                     help="master cycle times to replay at, us (0 = back to back); e.g. 0,1000")
+    ap.add_argument("--guest-halt-poll-ns", type=int, default=None,
+                    help="set the guest's haltpoll window for the run (diagnosis; restored after)")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     if os.geteuid() != 0:
@@ -326,6 +346,13 @@ def main():
     report = {"lrw": [], "brd": [], "started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
               "load": os.getloadavg()}
     tmp = Path(tempfile.mkdtemp(prefix="op_bench_"))
+    saved_halt_poll = halt_poll_ns()
+    if args.guest_halt_poll_ns is not None:
+        if saved_halt_poll is None:
+            sys.exit(f"op_bench: --guest-halt-poll-ns needs {HALT_POLL} (cpuidle-haltpoll)")
+        HALT_POLL.write_text(str(args.guest_halt_poll_ns))
+    report["guest_halt_poll_ns"] = halt_poll_ns()
+    print(f"guest_halt_poll_ns {report['guest_halt_poll_ns']}", flush=True)
     wb.netns_up()
     try:
         for n in [int(x) for x in args.slaves.split(",") if x]:
@@ -338,6 +365,8 @@ def main():
             brd_run(args, n, tmp, report)
     finally:
         wb.netns_down()
+        if args.guest_halt_poll_ns is not None:
+            HALT_POLL.write_text(str(saved_halt_poll))
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=1))
     return 0

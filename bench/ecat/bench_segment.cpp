@@ -10,18 +10,19 @@
 namespace rackcat::ecat::test {
 namespace {
 
-// SOEM's cyclic frame for n slaves of the test line: LRW over all process data + FRMW 0x0910.
-std::vector<uint8_t> cyclic_frame(size_t n) {
+// SOEM's cyclic frame for n slaves of the test line: LRW over all process data + FRMW 0x0910
+// (DC on), or the LRW alone (no DC: pysoem's frame in scripts/op_bench.py).
+std::vector<uint8_t> cyclic_frame(size_t n, bool dc = true) {
   FrameBuilder b;
   b.add_logical(Command::Lrw, 0, std::vector<uint8_t>(n * (kOutputBytes + kInputBytes), 0x5A));
-  b.add(Command::Frmw, Line::station(0), 0x0910, std::vector<uint8_t>(8, 0));
+  if (dc) b.add(Command::Frmw, Line::station(0), 0x0910, std::vector<uint8_t>(8, 0));
   return b.build();
 }
 
 // Runs the frame through the segment once per iteration, each time a fresh copy as from the
 // wire, and checks the LRW's working counter (read and written by every slave).
-void run_cyclic_frames(benchmark::State& state, Line& line, size_t n) {
-  const std::vector<uint8_t> frame = cyclic_frame(n);
+void run_cyclic_frames(benchmark::State& state, Line& line, size_t n, bool dc = true) {
+  const std::vector<uint8_t> frame = cyclic_frame(n, dc);
   std::vector<uint8_t> work = frame;
   for (auto _ : state) {
     std::memcpy(work.data(), frame.data(), frame.size());
@@ -55,6 +56,22 @@ void BM_CyclicLrwReplyPath(benchmark::State& state) {
   run_cyclic_frames(state, line, n);
 }
 BENCHMARK(BM_CyclicLrwReplyPath)->Arg(1)->Arg(16)->Arg(128)->Arg(199)->Unit(benchmark::kNanosecond);
+
+// The same without the FRMW: the frame of a master without DC, one LRW (the segment's path
+// for a frame of one logical datagram).
+void BM_CyclicLrwOnlyReplyPath(benchmark::State& state) {
+  const auto n = static_cast<size_t>(state.range(0));
+  Line line(n, {}, &SteadyClock::instance());
+  line.to_op();
+  line.segment->set_deferred_firmware(true);
+  run_cyclic_frames(state, line, n, false);
+}
+BENCHMARK(BM_CyclicLrwOnlyReplyPath)
+    ->Arg(1)
+    ->Arg(16)
+    ->Arg(128)
+    ->Arg(199)
+    ->Unit(benchmark::kNanosecond);
 
 // One slave's outputs in a line of N in OP (an LWR that only the first slave's output FMMU
 // meets): what every other ESC spends on a logical datagram that is not theirs.

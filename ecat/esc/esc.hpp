@@ -351,8 +351,20 @@ class Esc {
     // FMMU n's first byte in the datagram's data (its logical start - the datagram's address),
     // for n in reads | writes.
     std::array<uint16_t, kFmmus> offset{};
+    // The cyclic exchange (sm_exchange_buffers): an LRW through one FMMU reading the input SM
+    // the PDI fills and one writing the output SM the master fills, both active and buffered,
+    // at separate places in the datagram. Valid as long as the plan is: any FMMU or SM reload
+    // (the only way `active` or the control byte changes) discards it.
+    bool exchange = false;
+    bool exchange_watchdog = false;  // the output SM's control enables the watchdog trigger
+    uint8_t input_sm = 0;
+    uint8_t output_sm = 0;
+    uint16_t input_offset = 0;
+    uint16_t output_offset = 0;
   };
   void plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus);
+  void plan_exchange(uint8_t usable);  // the exchange part of the plan, once the rest is made
+  int exchange_whole(uint8_t* data);   // the planned exchange for datagram data `data`; its WKC
   bool whole_fmmu_read(int index, uint8_t* dst);
   bool whole_fmmu_write(int index, const uint8_t* src);
   // sync_manager.cpp: buffer semantics.
@@ -384,6 +396,14 @@ class Esc {
   bool sm_read_buffer(int index, uint8_t* dst);
   template <bool by_master>
   bool sm_write_buffer(int index, const uint8_t* src);
+  // The master's cyclic exchange through two whole buffered SMs in one LRW (ETG.1000.4
+  // §6.7.2): sm_read_buffer<true>(input, dst), then sm_write_buffer<true>(output, src) unless
+  // `write` is false (write protection refused it), with the checks process_whole_fmmus' plan
+  // made once left out: both SMs active and buffered, the PDI filling `input`, the master
+  // `output`. `watchdog`: output's control enables the process-data watchdog trigger. Returns
+  // the LRW's working counter (ETG.1000.4 §5.4.4): 1 for the read, 2 more for the write.
+  int sm_exchange_buffers(int input, uint8_t* dst, int output, const uint8_t* src, bool write,
+                          bool watchdog);
   // Whether bytes [address, address + len) are SM n's whole buffer, in process RAM, shared
   // with no other enabled SM.
   bool whole_sm_buffer(int index, uint16_t address, uint16_t len) const {

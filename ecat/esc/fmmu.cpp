@@ -134,8 +134,15 @@ size_t Esc::fmmu_ranges(std::span<FmmuRange, kFmmus> out) const {
 
 void Esc::process_logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus) {
   uint8_t* data = datagram + kDatagramHeaderSize;
-  const uint8_t wkc = process_logical(datagram[0], le::get32(datagram + 2), data, data_len,
-                                      static_cast<uint16_t>(fmmus & fmmu_active_mask_));
+  const uint32_t address = le::get32(datagram + 2);
+  const auto active = static_cast<uint16_t>(fmmus & fmmu_active_mask_);
+  // The master's cyclic LRW, the datagram the plan was made for: straight to the exchange
+  // that process_logical would reach through process_whole_fmmus.
+  const WholePlan& p = whole_plan_;
+  const bool exchange = p.exchange && p.valid && p.address == address && p.len == data_len &&
+                        p.fmmus == active && datagram[0] == static_cast<uint8_t>(Command::Lrw);
+  const uint8_t wkc = exchange ? static_cast<uint8_t>(exchange_whole(data))
+                               : process_logical(datagram[0], address, data, data_len, active);
   if (wkc != 0) {
     uint8_t* counter = data + data_len;
     le::put16(counter, static_cast<uint16_t>(le::get16(counter) + wkc));
@@ -231,7 +238,32 @@ void Esc::plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint1
   if (reads.meets(writes)) {
     p.incoming_first = static_cast<uint16_t>(writes.first);
     p.incoming_end = static_cast<uint16_t>(writes.end);
+    return;
   }
+  plan_exchange(usable);
+}
+
+void Esc::plan_exchange(uint8_t usable) {
+  WholePlan& p = whole_plan_;
+  if (usable != 0x03 || !std::has_single_bit(p.reads) || !std::has_single_bit(p.writes)) return;
+  const int r = std::countr_zero(p.reads);
+  const int w = std::countr_zero(p.writes);
+  const uint16_t input = fmmu_meeting_[static_cast<size_t>(r)];
+  const uint16_t output = fmmu_meeting_[static_cast<size_t>(w)];
+  if (!std::has_single_bit(input) || !std::has_single_bit(output)) return;  // plain memory
+  const SmState& in = sm_[std::countr_zero(input)];
+  const SmState& out = sm_[std::countr_zero(output)];
+  if (!in.active || !out.active || reg::sm::is_mailbox(in.control) ||
+      reg::sm::is_mailbox(out.control) || reg::sm::ecat_writes(in.control) ||
+      !reg::sm::ecat_writes(out.control)) {
+    return;
+  }
+  p.exchange = true;
+  p.exchange_watchdog = (out.control & reg::sm::kControlWatchdog) != 0;
+  p.input_sm = static_cast<uint8_t>(std::countr_zero(input));
+  p.output_sm = static_cast<uint8_t>(std::countr_zero(output));
+  p.input_offset = p.offset[static_cast<size_t>(r)];
+  p.output_offset = p.offset[static_cast<size_t>(w)];
 }
 
 int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data,
@@ -241,6 +273,7 @@ int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint
     plan_whole_fmmus(usable, address, len, fmmus);
   }
   if (!p.whole) return -1;
+  if (p.exchange) return exchange_whole(data);
   if ((p.reads | p.writes) == 0) return 0;
   const uint8_t* incoming = p.incoming_first < p.incoming_end
                                 ? keep_incoming(data, p.incoming_first, p.incoming_end)
@@ -257,6 +290,13 @@ int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint
   }
   if (cmd == Command::Lrw) return (read_done ? 1 : 0) + (write_done ? 2 : 0);
   return (read_done || write_done) ? 1 : 0;
+}
+
+int Esc::exchange_whole(uint8_t* data) {
+  const WholePlan& p = whole_plan_;
+  const bool write = !write_protection_active() || write_allowed(reg::kProcessRam);  // ESC-wide
+  return sm_exchange_buffers(p.input_sm, data + p.input_offset, p.output_sm, data + p.output_offset,
+                             write, p.exchange_watchdog);
 }
 
 bool Esc::whole_fmmu_read(int index, uint8_t* dst) {

@@ -144,6 +144,25 @@ TEST_F(LogicalMapTest, AnFmmuWrittenInTheSameFrameAsTheLogicalDatagram) {
   EXPECT_EQ(replies[1].data, (std::vector<uint8_t>{0x0A, 0x1B}));
 }
 
+TEST_F(LogicalMapTest, AnFmmuActivatedThroughAnFmmuByTheCyclicFrame) {
+  // A frame of one LRW (the path of a master's cyclic frame). Slave 0 writes, through its
+  // FMMU0, the activate byte of its own FMMU1 (0x061C), which maps logical 0x601 onto its byte
+  // 0x1100. The datagram was planned without that FMMU: slave 0 counts its write only, and the
+  // rest of the line still answers. The next frame finds FMMU1 and slave 0 reads as well; slave
+  // 1, later on the line, puts its byte over slave 0's.
+  map(0, 1, fmmu_entry(0x601, 1, 0, 7, 0x1100, 0, kRead, 0x00));
+  map(0, 0, fmmu_entry(0x600, 1, 0, 7, 0x061C, 0, kWrite));
+  map(1, 0, fmmu_entry(0x601, 1, 0, 7, 0x1100, 0, kRead));
+  poke(0, 0x1100, {0x0A});
+  poke(1, 0x1100, {0x1B});
+  const auto first = line.master->send_logical(Command::Lrw, 0x600, {0x01, 0x00});
+  EXPECT_EQ(first.wkc, 2 + 1);
+  EXPECT_EQ(first.data, (std::vector<uint8_t>{0x01, 0x1B}));
+  const auto second = line.master->send_logical(Command::Lrw, 0x600, {0x01, 0x00});
+  EXPECT_EQ(second.wkc, 2 + 1 + 1);
+  EXPECT_EQ(second.data, (std::vector<uint8_t>{0x01, 0x1B}));
+}
+
 TEST_F(LogicalMapTest, ManyLogicalDatagramsInOneFrame) {
   // More distinct logical datagrams than the map resolves per frame: the rest are answered
   // all the same (through each ESC's own FMMUs).

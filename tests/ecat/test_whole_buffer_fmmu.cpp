@@ -4,7 +4,10 @@
 // events 0x0210/0x0220, IRQ field, working counter and process-data watchdog. Two ESCs get the
 // same SyncManagers; one maps each buffer with one FMMU, the other with two FMMUs of half a
 // buffer each. Every step drives both the same way and compares what a master and the
-// firmware can see.
+// firmware can see. The one-FMMU chip takes each datagram either as process_datagram does
+// or, as the segment hands over a logical datagram its logical-address map resolved, through
+// process_logical_datagram (the way the cyclic LRW takes straight to the planned exchange of
+// the input and output buffers).
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -36,7 +39,7 @@ constexpr uint32_t kLogMbxOut = 0x100;
 constexpr uint32_t kLogMbxIn = 0x200;
 
 struct Chip : ChipMaster {
-  explicit Chip(bool split_buffers) : split(split_buffers) {
+  explicit Chip(bool split_buffers, bool mapped = false) : split(split_buffers), by_map(mapped) {
     sm(0, kMbxOut, kMbxLen, 0x26);  // mailbox, ECAT writes, AL event
     sm(1, kMbxIn, kMbxLen, 0x22);   // mailbox, ECAT reads, AL event
     sm(2, kOut, kOutLen, 0x74);     // buffered, ECAT writes, ECAT + AL event, watchdog
@@ -68,6 +71,7 @@ struct Chip : ChipMaster {
     }
   }
   bool split;
+  bool by_map;  // logical datagrams through process_logical_datagram, every FMMU handed over
   // One logical datagram; returns the whole datagram as it leaves (header with the IRQ
   // field, data, working counter).
   std::vector<uint8_t> logical(Command cmd, uint32_t address, std::vector<uint8_t> data) {
@@ -77,7 +81,11 @@ struct Chip : ChipMaster {
     le::put16(&d[6], static_cast<uint16_t>(data.size()));
     std::copy(data.begin(), data.end(), d.begin() + kDatagramHeaderSize);
     esc.begin_frame({clock.now_ns(), clock.now_ns()});
-    esc.process_datagram(d.data(), static_cast<uint16_t>(data.size()));
+    if (by_map) {
+      esc.process_logical_datagram(d.data(), static_cast<uint16_t>(data.size()), 0xFFFF);
+    } else {
+      esc.process_datagram(d.data(), static_cast<uint16_t>(data.size()));
+    }
     return d;
   }
   // What the master and the firmware see: registers other than the FMMUs (which differ by
@@ -99,8 +107,8 @@ std::vector<uint8_t> bytes(size_t n, uint8_t seed) {
   return v;
 }
 
-struct WholeBufferFmmu : ::testing::Test {
-  Chip whole{false};
+struct WholeBufferFmmu : ::testing::TestWithParam<bool> {
+  Chip whole{false, GetParam()};
   Chip split{true};
   // Runs `step` on both chips and compares everything visible afterwards.
   void both(const char* what, const std::function<void(Chip&)>& step) {
@@ -122,7 +130,7 @@ struct WholeBufferFmmu : ::testing::Test {
   }
 };
 
-TEST_F(WholeBufferFmmu, CyclicProcessDataAndFirmwareTurns) {
+TEST_P(WholeBufferFmmu, CyclicProcessDataAndFirmwareTurns) {
   for (uint8_t cycle = 0; cycle < 5; ++cycle) {
     logical("LRW", Command::Lrw, kLogOut, bytes(kOutLen + kInLen, cycle));
     both("PDI reads the outputs", [](Chip& c) {
@@ -145,7 +153,7 @@ TEST_F(WholeBufferFmmu, CyclicProcessDataAndFirmwareTurns) {
   logical("LRW of the whole outputs", Command::Lrw, kLogOut, bytes(kOutLen, 0xF0));
 }
 
-TEST_F(WholeBufferFmmu, DeactivatedSyncManagerAndWriteProtection) {
+TEST_P(WholeBufferFmmu, DeactivatedSyncManagerAndWriteProtection) {
   logical("LRW", Command::Lrw, kLogOut, bytes(kOutLen + kInLen, 1));
   both("PDI deactivates SM2", [](Chip& c) {
     const uint8_t deactivate = 0x01;
@@ -165,7 +173,7 @@ TEST_F(WholeBufferFmmu, DeactivatedSyncManagerAndWriteProtection) {
   logical("LRW again", Command::Lrw, kLogOut, bytes(kOutLen + kInLen, 4));
 }
 
-TEST_F(WholeBufferFmmu, MailboxesThroughFmmus) {
+TEST_P(WholeBufferFmmu, MailboxesThroughFmmus) {
   logical("LRD of the empty mailbox", Command::Lrd, kLogMbxIn, bytes(kMbxLen, 0));
   both("PDI writes a reply", [](Chip& c) {
     const auto reply = bytes(kMbxLen, 0x21);
@@ -182,7 +190,7 @@ TEST_F(WholeBufferFmmu, MailboxesThroughFmmus) {
   logical("LWR of the next request", Command::Lwr, kLogMbxOut, bytes(kMbxLen, 0x51));
 }
 
-TEST_F(WholeBufferFmmu, ReadAndWriteOfTheSameBytes) {
+TEST_P(WholeBufferFmmu, ReadAndWriteOfTheSameBytes) {
   // A read FMMU over the outputs' logical bytes as well: the LRW returns the old outputs while
   // writing the new ones (ETG.1000.4 §5.4.3).
   both("read FMMU over the outputs",
@@ -191,7 +199,7 @@ TEST_F(WholeBufferFmmu, ReadAndWriteOfTheSameBytes) {
   logical("LRW", Command::Lrw, kLogOut, bytes(kOutLen + kInLen, 6));
 }
 
-TEST_F(WholeBufferFmmu, ReconfiguredFmmuIsFollowed) {
+TEST_P(WholeBufferFmmu, ReconfiguredFmmuIsFollowed) {
   logical("LRW", Command::Lrw, kLogOut, bytes(kOutLen + kInLen, 7));
   both("outputs moved to logical 0x40", [](Chip& c) {
     c.apwr(0x0600, {0x40});
@@ -200,6 +208,11 @@ TEST_F(WholeBufferFmmu, ReconfiguredFmmuIsFollowed) {
   logical("LRW at the old place", Command::Lrw, kLogOut, bytes(kOutLen + kInLen, 8));
   logical("LWR at the new place", Command::Lwr, 0x40, bytes(kOutLen, 9));
 }
+
+INSTANTIATE_TEST_SUITE_P(Datagram, WholeBufferFmmu, ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "ThroughTheLogicalMap" : "AsProcessDatagram";
+                         });
 
 }  // namespace
 }  // namespace rackcat::ecat::test
