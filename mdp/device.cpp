@@ -723,9 +723,9 @@ void Device::write_outputs(std::span<const uint8_t> sm2) {
 
 bool Device::read_inputs(std::span<uint8_t> sm3) {
   Impl& d = *impl_;
-  if (!d.repeats.inputs_wanted()) {
-    // A repeated cycle: SM3 holds these inputs already; only the latch time moves (0xF6F0 is
-    // not mapped, or the device would not repeat).
+  if (!d.repeats.inputs_wanted([&d] { return d.listeners_repeat(); })) {
+    // A repeated cycle or refresh: SM3 holds these inputs already; only the latch time moves
+    // (0xF6F0 is not mapped, or the device would not repeat).
     d.latch_pending = true;
     d.latch_at = base::RoundTime::now();
     return false;

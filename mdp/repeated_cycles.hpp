@@ -14,7 +14,11 @@
 //   - a settled device skips a cycle whose output data is the recorded one, as long as nothing
 //     disturbed it and every listener still agrees (a timer of its own may be due): the SM3
 //     image is the one the firmware handed over already (ecat::Application::update_inputs
-//     answers false, so the master reads the same buffer, ETG.1000.4 §6.7.2).
+//     answers false, so the master reads the same buffer, ETG.1000.4 §6.7.2);
+//   - a refresh of the inputs alone (read_inputs with no write_outputs since the last one: a
+//     master that writes SM2 and reads SM3 in separate frames, LWR then LRD) is skipped on the
+//     same terms; one that runs leaves the recording standing if it packed the recorded inputs
+//     (the next full cycle with the recorded outputs settles again), and drops it otherwise.
 // Whatever reads or changes the device from outside the cycle (a mailbox request, an ESM
 // transition, SYNC, the watchdog, the control API, a RIM link) calls disturb() first, so the
 // next cycle runs in full. No allocation after arm().
@@ -81,17 +85,29 @@ class RepeatedCycles {
     }
     return false;
   }
-  // read_inputs: false when this cycle's write_outputs skipped it (the SM3 image stands).
-  bool inputs_wanted() {
-    if (!skipping_) return true;
-    skipping_ = false;
-    return false;
+  // read_inputs: false when this cycle's write_outputs skipped it, or when it refreshes the
+  // inputs alone on a settled device that nothing disturbed and whose listeners agree (the
+  // SM3 image stands either way). `repeats` asks the listeners, only for such a refresh.
+  template <class Repeats>
+  bool inputs_wanted(Repeats&& repeats) {
+    if (skipping_) {
+      skipping_ = false;
+      return false;
+    }
+    return full_ || !settled_ || settled_at_ != disturbances_ || !repeats();
   }
-  // read_inputs, after a full cycle packed `sm3`: records it and decides whether the device
-  // has settled. `repeats` asks the listeners, only when the cycle repeated the last one.
+  // read_inputs, after it packed `sm3`: for a full cycle records it and decides whether the
+  // device has settled (`repeats` asks the listeners, only when the cycle repeated the last
+  // one); for a refresh of the inputs alone keeps the recording only if `sm3` is its inputs.
   template <class Repeats>
   void inputs_made(std::span<const uint8_t> sm3, Repeats&& repeats) {
-    const bool recording = full_ && possible_ && sm3.size() == input_bytes_;
+    if (!full_) {
+      recorded_ = recorded_ && settled_at_ == disturbances_ &&
+                  same(sm3, images_ + output_bytes_, input_bytes_);
+      settled_ = false;
+      return;
+    }
+    const bool recording = possible_ && sm3.size() == input_bytes_;
     bool inputs_repeated = false;
     if (recording) {
       uint8_t* const inputs = images_ + output_bytes_;

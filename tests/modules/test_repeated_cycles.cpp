@@ -1,10 +1,10 @@
 // A master that repeats its output data gets the same inputs without a round through the
-// cards (mdp/repeated_cycles.hpp, issue 16), and still sees at once everything that changes
-// them in between: new output data, a control command, a dictionary write, an SDO request,
-// a time-varying source, the rack's own 30 s CPU temperature reading, the input latch time
-// 0xF6F0.
-// Driven the way the firmware drives the device: one SM2 and one SM3 buffer kept across
-// cycles, SM3 written only when read_inputs() packed it (ecat/slave/process_data.cpp).
+// cards (mdp/repeated_cycles.hpp, issue 16), also when it reads them in a frame of their own,
+// and still sees at once everything that changes them in between: new output data, a control
+// command, a dictionary write, an SDO request, a time-varying source, the rack's own 30 s CPU
+// temperature reading, the input latch time 0xF6F0. Driven the way the firmware drives the device:
+// one SM2 and one SM3 buffer kept across cycles, SM3 written only when read_inputs() packed it
+// (ecat/slave/process_data.cpp).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -137,6 +137,52 @@ TEST_F(RepeatedCycleTest, AnSdoRequestBetweenRepeatsRunsTheNextCycleInFull) {
   EXPECT_TRUE(cycle(0x42));
   EXPECT_EQ(sm3[0], 0x42);
   EXPECT_EQ(settle(0x42), 1);
+}
+
+TEST_F(RepeatedCycleTest, AMasterReadingTheInputsInAFrameOfTheirOwnSettlesToo) {
+  // LWR, then LRD: the firmware hands the outputs over and packs the inputs on the LWR's SM2
+  // event, and packs them again on the LRD's SM3 event with no new outputs in between.
+  const auto refresh = [this] { return device.read_inputs(sm3); };
+  EXPECT_TRUE(cycle(0x3C));
+  EXPECT_EQ(sm3[0], 0x3C);
+  EXPECT_TRUE(refresh());  // not settled yet: packed again, and the recording stands
+  EXPECT_EQ(sm3[0], 0x3C);
+  // The next full cycle finds the recorded outputs and inputs and settles (one more when the
+  // first cycle in OP also updated the exception tree): from then on the LRD's refresh is
+  // skipped as well.
+  int full = 0;
+  for (; full < 5; ++full) {
+    ASSERT_TRUE(cycle(0x3C));
+    if (!refresh()) break;
+  }
+  EXPECT_LE(full, 1);
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_FALSE(refresh()) << "refresh " << i;
+    EXPECT_FALSE(cycle(0x3C)) << "cycle " << i;
+    EXPECT_EQ(sm3[0], 0x3C);
+  }
+  // A control command between the LWR and the LRD: the LRD's refresh packs its effect.
+  rack.set_source(inputs().module().number, 0, "constant", {{"value", "1"}});
+  EXPECT_TRUE(refresh());
+  EXPECT_EQ(sm3[0], 0x3D);
+  // That refresh packed other inputs than the recorded ones: the next full cycle records anew
+  // and one more settles.
+  EXPECT_TRUE(cycle(0x3C));
+  EXPECT_TRUE(refresh());
+  EXPECT_TRUE(cycle(0x3C));
+  EXPECT_FALSE(refresh());
+  EXPECT_FALSE(cycle(0x3C));
+  EXPECT_EQ(sm3[0], 0x3D);
+}
+
+TEST_F(RepeatedCycleTest, InputsThatMoveWithTimeAreRefreshedEveryTime) {
+  rack.set_source(inputs().module().number, 3, "sine",
+                  {{"amplitude", "1"}, {"frequency", "50"}, {"offset", "0.5"}});
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_TRUE(cycle(0x01)) << "cycle " << i;
+    clock += 0.001;
+    EXPECT_TRUE(device.read_inputs(sm3)) << "refresh " << i;
+  }
 }
 
 TEST_F(RepeatedCycleTest, LeavingOpAndComingBackRunsInFull) {
