@@ -152,7 +152,17 @@ class RackLine {
     if (dc) b.add(Command::Frmw, Line::station(0), 0x0910, std::vector<uint8_t>(8, 0));
     return b.build();
   }
-  // The LRW's working counter in a frame that came back.
+  // A master that does not combine them into an LRW: LWR of every slave's outputs (all
+  // `value`), then, in a frame of its own, LRD of every slave's inputs.
+  std::vector<std::vector<uint8_t>> split_frames(uint8_t value) const {
+    FrameBuilder lwr;
+    lwr.add_logical(Command::Lwr, 0, std::vector<uint8_t>(racks_.size() * outputs_, value));
+    FrameBuilder lrd;
+    lrd.add_logical(Command::Lrd, static_cast<uint32_t>(racks_.size() * outputs_),
+                    std::vector<uint8_t>(racks_.size() * inputs_, 0));
+    return {lwr.build(), lrd.build()};
+  }
+  // The first datagram's working counter in a frame that came back (the LRW, LWR or LRD).
   uint16_t lrw_wkc(const std::vector<uint8_t>& f) const { return decode(f).at(0).wkc; }
   Segment& segment() { return *segment_; }
   size_t size() const { return racks_.size(); }
@@ -203,6 +213,31 @@ void BM_RackLineCycle(benchmark::State& state) {
 void BM_RackLineCycleSteady(benchmark::State& state) {
   run(state, false);
 }
+// One master cycle of LWR + LRD (two frames, each followed by its round), the outputs repeated.
+void BM_RackLineLwrLrdSteady(benchmark::State& state) {
+  const auto n = static_cast<size_t>(state.range(0));
+  RackLine line(n);
+  if (const std::string failed = line.to_op(); !failed.empty()) {
+    state.SkipWithError(failed.c_str());
+    return;
+  }
+  line.segment().set_deferred_firmware(true);
+  const std::vector<std::vector<uint8_t>> frames = line.split_frames(0x5A);
+  std::vector<std::vector<uint8_t>> work = frames;
+  for (auto _ : state) {
+    rack_line_cycle(line.segment(), frames[0], work[0]);
+    rack_line_cycle(line.segment(), frames[1], work[1]);
+  }
+  if (line.lrw_wkc(work[0]) != n || line.lrw_wkc(work[1]) != n) {
+    state.SkipWithError("unexpected LWR/LRD working counter");
+  }
+  state.counters["slaves"] = static_cast<double>(n);
+  state.counters["ns_per_slave"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(n),
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_RackLineLwrLrdSteady)->Arg(16)->Arg(199)->Unit(benchmark::kMicrosecond);
+
 BENCHMARK(BM_RackLineCycle)->ArgsProduct({{16, 199}, {0, 1}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RackLineCycleSteady)->ArgsProduct({{16, 199}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
