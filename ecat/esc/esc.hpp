@@ -97,8 +97,21 @@ class Esc {
   // A logical datagram (LRD, LWR, LRW) handled through the FMMUs in `fmmus` only (bit n =
   // FMMU n): those the segment's logical-address map found inside the datagram's range
   // (ecat/logical_map.hpp). Working counter and IRQ field as process_datagram; FMMUs that are
-  // no longer activated are skipped.
-  void process_logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus);
+  // no longer activated are skipped. The master's cyclic LRW - the datagram the kept plan was
+  // made for, when that plan is an exchange - goes straight to it.
+  void process_logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus) {
+    const WholePlan& p = whole_plan_;
+    if (p.exchange && p.valid && p.len == data_len &&
+        p.fmmus == static_cast<uint16_t>(fmmus & fmmu_active_mask_) &&
+        datagram[0] == static_cast<uint8_t>(Command::Lrw) &&
+        p.address ==
+            (static_cast<uint32_t>(datagram[2]) | static_cast<uint32_t>(datagram[3]) << 8 |
+             static_cast<uint32_t>(datagram[4]) << 16 | static_cast<uint32_t>(datagram[5]) << 24)) {
+      exchange_datagram(datagram, data_len);
+    } else {
+      logical_datagram(datagram, data_len, fmmus);
+    }
+  }
   // A datagram that does not address this ESC (a logical one none of its FMMUs meets) passing
   // through: only the IRQ field is ORed with this ESC's masked ECAT events, as process_datagram
   // does for every datagram.
@@ -365,6 +378,10 @@ class Esc {
   void plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus);
   void plan_exchange(uint8_t usable);  // the exchange part of the plan, once the rest is made
   int exchange_whole(uint8_t* data);   // the planned exchange for datagram data `data`; its WKC
+  // process_logical_datagram: the planned exchange for the whole datagram (working counter,
+  // IRQ field; sync_manager.cpp), and every other logical datagram (fmmu.cpp).
+  void exchange_datagram(uint8_t* datagram, uint16_t data_len);
+  void logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus);
   bool whole_fmmu_read(int index, uint8_t* dst);
   bool whole_fmmu_write(int index, const uint8_t* src);
   // sync_manager.cpp: buffer semantics.

@@ -132,17 +132,10 @@ size_t Esc::fmmu_ranges(std::span<FmmuRange, kFmmus> out) const {
   return n;
 }
 
-void Esc::process_logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus) {
+void Esc::logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus) {
   uint8_t* data = datagram + kDatagramHeaderSize;
-  const uint32_t address = le::get32(datagram + 2);
-  const auto active = static_cast<uint16_t>(fmmus & fmmu_active_mask_);
-  // The master's cyclic LRW, the datagram the plan was made for: straight to the exchange
-  // that process_logical would reach through process_whole_fmmus.
-  const WholePlan& p = whole_plan_;
-  const bool exchange = p.exchange && p.valid && p.address == address && p.len == data_len &&
-                        p.fmmus == active && datagram[0] == static_cast<uint8_t>(Command::Lrw);
-  const uint8_t wkc = exchange ? static_cast<uint8_t>(exchange_whole(data))
-                               : process_logical(datagram[0], address, data, data_len, active);
+  const uint8_t wkc = process_logical(datagram[0], le::get32(datagram + 2), data, data_len,
+                                      static_cast<uint16_t>(fmmus & fmmu_active_mask_));
   if (wkc != 0) {
     uint8_t* counter = data + data_len;
     le::put16(counter, static_cast<uint16_t>(le::get16(counter) + wkc));

@@ -279,6 +279,17 @@ int Esc::sm_exchange_buffers(int input, uint8_t* dst, int output, const uint8_t*
   return 3;
 }
 
+void Esc::exchange_datagram(uint8_t* datagram, uint16_t data_len) {
+  const WholePlan& p = whole_plan_;
+  uint8_t* const data = datagram + kDatagramHeaderSize;
+  const bool write = !write_protection_active() || write_allowed(reg::kProcessRam);  // ESC-wide
+  const int wkc = sm_exchange_buffers(p.input_sm, data + p.input_offset, p.output_sm,
+                                      data + p.output_offset, write, p.exchange_watchdog);
+  uint8_t* const counter = data + data_len;
+  le::put16(counter, static_cast<uint16_t>(le::get16(counter) + wkc));
+  or_irq(datagram);
+}
+
 template bool Esc::sm_read_buffer<true>(int n, uint8_t* dst);
 template bool Esc::sm_read_buffer<false>(int n, uint8_t* dst);
 template bool Esc::sm_write_buffer<true>(int n, const uint8_t* src);
