@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "base/cache_line.hpp"
+#include "base/little_endian.hpp"
 #include "ecat/clock.hpp"
 #include "ecat/esc/esc_memory.hpp"
 #include "ecat/frame.hpp"
@@ -103,10 +104,7 @@ class Esc {
     const WholePlan& p = whole_plan_;
     if (p.exchange && p.valid && p.len == data_len &&
         p.fmmus == static_cast<uint16_t>(fmmus & fmmu_active_mask_) &&
-        datagram[0] == static_cast<uint8_t>(Command::Lrw) &&
-        p.address ==
-            (static_cast<uint32_t>(datagram[2]) | static_cast<uint32_t>(datagram[3]) << 8 |
-             static_cast<uint32_t>(datagram[4]) << 16 | static_cast<uint32_t>(datagram[5]) << 24)) {
+        datagram[0] == static_cast<uint8_t>(Command::Lrw) && p.address == le::get32(datagram + 2)) {
       exchange_datagram(datagram, data_len);
     } else {
       logical_datagram(datagram, data_len, fmmus);
