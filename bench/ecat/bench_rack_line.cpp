@@ -163,7 +163,7 @@ class RackLine {
     return {lwr.build(), lrd.build()};
   }
   // The first datagram's working counter in a frame that came back (the LRW, LWR or LRD).
-  uint16_t lrw_wkc(const std::vector<uint8_t>& f) const { return decode(f).at(0).wkc; }
+  uint16_t first_wkc(const std::vector<uint8_t>& f) const { return decode(f).at(0).wkc; }
   Segment& segment() { return *segment_; }
   size_t size() const { return racks_.size(); }
 
@@ -200,7 +200,7 @@ void run(benchmark::State& state, bool changing) {
   std::vector<uint8_t> work = frames[0];
   size_t k = 0;
   for (auto _ : state) rack_line_cycle(line.segment(), frames[k++ & 1], work);
-  if (line.lrw_wkc(work) != 3 * n) state.SkipWithError("unexpected LRW working counter");
+  if (line.first_wkc(work) != 3 * n) state.SkipWithError("unexpected LRW working counter");
   state.counters["slaves"] = static_cast<double>(n);
   state.counters["ns_per_slave"] =
       benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(n),
@@ -228,7 +228,7 @@ void BM_RackLineLwrLrdSteady(benchmark::State& state) {
     rack_line_cycle(line.segment(), frames[0], work[0]);
     rack_line_cycle(line.segment(), frames[1], work[1]);
   }
-  if (line.lrw_wkc(work[0]) != n || line.lrw_wkc(work[1]) != n) {
+  if (line.first_wkc(work[0]) != n || line.first_wkc(work[1]) != n) {
     state.SkipWithError("unexpected LWR/LRD working counter");
   }
   state.counters["slaves"] = static_cast<double>(n);

@@ -167,11 +167,7 @@ void Esc::process_datagram(uint8_t* datagram, uint16_t data_len) {
   if (physical && (addressed || cmd == Command::Armw || cmd == Command::Frmw)) {
     wkc = process_physical(command, ado, data, data_len, addressed);
   }
-  if (wkc != 0) {
-    uint8_t* counter = data + data_len;
-    le::put16(counter, static_cast<uint16_t>(le::get16(counter) + wkc));
-  }
-  or_irq(datagram);
+  leave_datagram(datagram, data_len, wkc);
 }
 
 void Esc::pass_datagram(uint8_t* datagram) const {

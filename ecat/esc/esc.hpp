@@ -287,6 +287,15 @@ class Esc {
   uint8_t walk_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data, uint16_t len,
                      uint16_t fmmus);
   void or_irq(uint8_t* datagram) const;
+  // The datagram leaves this ESC: `wkc` added to its working counter (after `data_len` data
+  // bytes), its IRQ field ORed with this ESC's masked events (ETG.1000.4 §5.4).
+  void leave_datagram(uint8_t* datagram, uint16_t data_len, unsigned wkc) const {
+    if (wkc != 0) {
+      uint8_t* counter = datagram + kDatagramHeaderSize + data_len;
+      le::put16(counter, static_cast<uint16_t>(le::get16(counter) + wkc));
+    }
+    or_irq(datagram);
+  }
   // One FMMU intersected with one logical datagram, computed once per datagram: logical bits
   // lo..hi inside both, the bit shift onto physical memory and the physical bytes touched.
   // No default member values: process_logical keeps 2 x 16 of them on the stack per datagram

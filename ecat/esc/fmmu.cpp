@@ -136,11 +136,7 @@ void Esc::logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus)
   uint8_t* data = datagram + kDatagramHeaderSize;
   const uint8_t wkc = process_logical(datagram[0], le::get32(datagram + 2), data, data_len,
                                       static_cast<uint16_t>(fmmus & fmmu_active_mask_));
-  if (wkc != 0) {
-    uint8_t* counter = data + data_len;
-    le::put16(counter, static_cast<uint16_t>(le::get16(counter) + wkc));
-  }
-  or_irq(datagram);
+  leave_datagram(datagram, data_len, wkc);
 }
 
 uint8_t Esc::process_logical(uint8_t command, uint32_t address, uint8_t* data, uint16_t len,

@@ -285,9 +285,7 @@ void Esc::exchange_datagram(uint8_t* datagram, uint16_t data_len) {
   const bool write = !write_protection_active() || write_allowed(reg::kProcessRam);  // ESC-wide
   const int wkc = sm_exchange_buffers(p.input_sm, data + p.input_offset, p.output_sm,
                                       data + p.output_offset, write, p.exchange_watchdog);
-  uint8_t* const counter = data + data_len;
-  le::put16(counter, static_cast<uint16_t>(le::get16(counter) + wkc));
-  or_irq(datagram);
+  leave_datagram(datagram, data_len, static_cast<unsigned>(wkc));
 }
 
 template bool Esc::sm_read_buffer<true>(int n, uint8_t* dst);
