@@ -10,7 +10,6 @@
 #include <csignal>
 #include <ctime>
 
-#include "base/cpu_relax.hpp"
 #include "base/real_time.hpp"
 #include "ecat/host/pcap_writer.hpp"
 
@@ -126,9 +125,6 @@ void EventLoop::handle_frame(std::span<uint8_t> frame) {
     link_.send(out);
     if (options_.pcap != nullptr) options_.pcap->write(out);
   }
-  // The frame's bytes are done with: its slot in the receive ring goes back to the kernel
-  // before any wait.
-  link_.release();
   if (after_frame_) {
     work_done_ns_ = 0;
     run_slice();
@@ -182,13 +178,6 @@ int EventLoop::run() {
   return rc;
 }
 
-namespace {
-// How long the window watches the receive ring between its checks of posts, signals and
-// timers and its sched_yield(): a frame is taken within a few loads of landing, and a master
-// sharing this core waits at most this long for it.
-constexpr uint64_t kRingWatchNs = 2'000;
-}  // namespace
-
 uint64_t EventLoop::spin_window_ns() const {
   return base::runs_real_time() ? 0 : options_.spin_after_frame_ns;
 }
@@ -211,11 +200,7 @@ int EventLoop::run_blocking() {
     }
     if (now < spin_until) {
       // The bounded window after a frame: non-blocking receives, posts and signals checked
-      // between them, timers above; then back to sleeping in ppoll. Between the checks the
-      // loop watches the receive ring itself for up to kRingWatchNs (a load per turn, no system
-      // call), so a frame is taken the moment it lands rather than after the next yield.
-      const uint64_t watch_until = std::min(spin_until, now + kRingWatchNs);
-      while (!link_.frame_pending() && monotonic_ns() < watch_until) base::cpu_relax();
+      // between them, timers above; then back to sleeping in ppoll.
       const auto frame = link_.try_receive();
       if (!frame.empty()) {
         handle_frame(frame);
@@ -246,10 +231,9 @@ int EventLoop::run_blocking() {
     if (ready == 0) continue;
     // One frame per wake-up: if more are queued ppoll returns at once, and we save the
     // receive call that would only report "empty".
-    // POLLERR (the interface went down): the pending error is taken, so the loop does not spin
-    // on it; frames flow again when the interface comes back.
+    // POLLERR (the interface went down): the receive call consumes the pending error, so the
+    // loop does not spin on it; frames flow again when the interface comes back.
     if (fds[0].revents & (POLLIN | POLLERR)) {
-      if (fds[0].revents & POLLERR) link_.clear_error();
       const auto frame = link_.try_receive();
       if (!frame.empty()) {
         handle_frame(frame);

@@ -19,9 +19,9 @@
 //
 // After-frame work (set_after_frame_work) runs in slices after the reply; between slices - once
 // the work has had Options::work_before_yield_ns and for Options::yield_window_ns after the
-// reply - the loop takes a frame that is waiting (a load of the receive ring's next slot; a
-// recvmsg of about 0.4 µs without the ring), so a master sending back to back waits for one
-// slice at most, not for all the work of its previous frame. A frame found later than that
+// reply - the loop takes a frame that is waiting (a
+// non-blocking receive, about 0.4 µs when none is), so a master sending back to back waits for
+// one slice at most, not for all the work of its previous frame. A frame found later than that
 // (a master with a real cycle time, or the loop thread was descheduled) waits for the work to
 // finish, exactly as before slices existed.
 //
@@ -29,8 +29,7 @@
 // its eventfd. Whichever thread the kernel picks to run it, the process is not killed, so
 // threads started before the loop (with any signal mask) are harmless.
 //
-// The cyclic path allocates nothing: the frame is in the link's receive ring (or its fixed
-// buffer), answered in place and released before the loop waits again; the handlers are
+// The cyclic path allocates nothing: the frame is the link's fixed buffer, the handlers are
 // set once, and post() allocates only on the posting thread.
 #pragma once
 

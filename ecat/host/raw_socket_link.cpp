@@ -6,7 +6,6 @@
 #include <linux/if_packet.h>
 #include <net/if.h>
 #include <sys/ioctl.h>
-#include <sys/mman.h>
 #include <sys/socket.h>
 #include <unistd.h>
 #include <cerrno>
@@ -64,8 +63,7 @@ void attach_filter(int fd) {
 
 }  // namespace
 
-RawSocketLink::RawSocketLink(const std::string& interface_name, LinkOptions options)
-    : name_(interface_name) {
+RawSocketLink::RawSocketLink(const std::string& interface_name) : name_(interface_name) {
   if (name_.empty() || name_.size() >= IFNAMSIZ) {
     throw LinkError(LinkErrorKind::NoInterface, "no such network interface: '" + name_ + "'");
   }
@@ -94,8 +92,6 @@ RawSocketLink::RawSocketLink(const std::string& interface_name, LinkOptions opti
     if (setsockopt(fd_, SOL_PACKET, PACKET_AUXDATA, &one, sizeof(one)) < 0) {
       fail_open(name_, "PACKET_AUXDATA", errno);
     }
-    // Before bind: no frame is queued anywhere but in the ring.
-    if (options.receive_ring) setup_receive_ring();
 
     sockaddr_ll addr{};
     addr.sll_family = AF_PACKET;
@@ -115,7 +111,6 @@ RawSocketLink::RawSocketLink(const std::string& interface_name, LinkOptions opti
       fail_open(name_, "PACKET_ADD_MEMBERSHIP", errno);
     }
   } catch (...) {
-    if (ring_ != nullptr) ::munmap(ring_, kRingFrames * kRingFrameSize);
     ::close(fd_);
     fd_ = -1;
     throw;
@@ -123,104 +118,10 @@ RawSocketLink::RawSocketLink(const std::string& interface_name, LinkOptions opti
 }
 
 RawSocketLink::~RawSocketLink() {
-  if (ring_ != nullptr) ::munmap(ring_, kRingFrames * kRingFrameSize);
   if (fd_ >= 0) ::close(fd_);
 }
 
-void RawSocketLink::setup_receive_ring() {
-  // TPACKET_V2: one frame per slot, handed over the moment it is written (V3 batches frames
-  // into blocks retired by a timer, which would delay a lone frame).
-  int version = TPACKET_V2;
-  if (setsockopt(fd_, SOL_PACKET, PACKET_VERSION, &version, sizeof(version)) < 0) return;
-  tpacket_req req{};
-  req.tp_block_size = kRingBlockSize;
-  req.tp_frame_size = kRingFrameSize;
-  req.tp_block_nr = kRingFrames * kRingFrameSize / kRingBlockSize;
-  req.tp_frame_nr = kRingFrames;
-  if (setsockopt(fd_, SOL_PACKET, PACKET_RX_RING, &req, sizeof(req)) < 0) return;
-  void* ring =
-      ::mmap(nullptr, kRingFrames * kRingFrameSize, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, 0);
-  if (ring == MAP_FAILED) {
-    // Without the mapping the ring is of no use: take it down so frames queue for recvmsg.
-    req = {};
-    (void)setsockopt(fd_, SOL_PACKET, PACKET_RX_RING, &req, sizeof(req));
-    return;
-  }
-  ring_ = static_cast<uint8_t*>(ring);
-}
-
-void RawSocketLink::clear_error() {
-  int err = 0;
-  socklen_t len = sizeof(err);
-  // SO_ERROR reads and clears sk_err; what it was does not matter, frames flow again when the
-  // interface comes back.
-  (void)getsockopt(fd_, SOL_SOCKET, SO_ERROR, &err, &len);
-}
-
 std::span<uint8_t> RawSocketLink::try_receive() {
-  release();
-  return ring_ != nullptr ? receive_from_ring() : receive_with_recvmsg();
-}
-
-void RawSocketLink::release_slot() {
-  // The slot goes back to the kernel only after everything we did with its bytes
-  // (packet_mmap.rst: the status word is the hand-over).
-  __atomic_store_n(&static_cast<tpacket2_hdr*>(held_)->tp_status, TP_STATUS_KERNEL,
-                   __ATOMIC_RELEASE);
-  held_ = nullptr;
-  ring_head_ = ring_head_ + 1 == kRingFrames ? 0 : ring_head_ + 1;
-}
-
-std::span<uint8_t> RawSocketLink::receive_from_ring() {
-  for (;;) {
-    uint8_t* const slot = ring_ + ring_head_ * kRingFrameSize;
-    auto* const hdr = reinterpret_cast<tpacket2_hdr*>(slot);
-    // The kernel fills the slots in order and hands each over with this word.
-    const uint32_t status = __atomic_load_n(&hdr->tp_status, __ATOMIC_ACQUIRE);
-    if ((status & TP_STATUS_USER) == 0) return {};
-    held_ = hdr;
-    const size_t mac = hdr->tp_mac;
-    const size_t len = hdr->tp_snaplen;
-    const auto* from =
-        reinterpret_cast<const sockaddr_ll*>(slot + TPACKET_ALIGN(sizeof(tpacket2_hdr)));
-    // Same checks as the kernel filter, for kernels where it could not be attached; a frame cut
-    // short by the slot (longer than any EtherCAT frame) is dropped as recvmsg's path does.
-    if (from->sll_pkttype == PACKET_OUTGOING || mac < TPACKET2_HDRLEN ||
-        mac + len > kRingFrameSize || len != hdr->tp_len || len < kEthHeader ||
-        len > kMaxFrame - kVlanTag || slot[mac + kEthTypeOffset] != (kEtherTypeEcat >> 8) ||
-        slot[mac + kEthTypeOffset + 1] != (kEtherTypeEcat & 0xFF)) {
-      ++ignored_;
-      release_slot();
-      continue;
-    }
-    ++rx_frames_;
-    if ((status & TP_STATUS_VLAN_VALID) != 0) {
-      const uint16_t tpid =
-          (status & TP_STATUS_VLAN_TPID_VALID) ? hdr->tp_vlan_tpid : kEtherTypeVlan;
-      const auto tagged = with_vlan_tag(slot + mac, len, tpid, hdr->tp_vlan_tci);
-      release_slot();
-      return tagged;
-    }
-    return {slot + mac, len};
-  }
-}
-
-std::span<uint8_t> RawSocketLink::with_vlan_tag(const uint8_t* frame, size_t len, uint16_t tpid,
-                                                uint16_t tci) {
-  // An IEEE 802.1Q tag the kernel (or the NIC) stripped: put it back where it was, so the
-  // frame is processed and answered as it arrived, tagged and at full length (ETG.1000.4
-  // §5.3, docs/ESC.md). `len` <= kMaxFrame - kVlanTag (the callers' checks).
-  if (frame != rx_.data()) std::memcpy(rx_.data(), frame, len);
-  std::memmove(&rx_[kEthTypeOffset + kVlanTag], &rx_[kEthTypeOffset], len - kEthTypeOffset);
-  rx_[kEthTypeOffset] = static_cast<uint8_t>(tpid >> 8);
-  rx_[kEthTypeOffset + 1] = static_cast<uint8_t>(tpid);
-  rx_[kEthTypeOffset + 2] = static_cast<uint8_t>(tci >> 8);
-  rx_[kEthTypeOffset + 3] = static_cast<uint8_t>(tci);
-  ++vlan_tagged_;
-  return {rx_.data(), len + kVlanTag};
-}
-
-std::span<uint8_t> RawSocketLink::receive_with_recvmsg() {
   for (;;) {
     sockaddr_ll from{};
     // Room for a tag the kernel took off (below): the frame is received 4 bytes short of the
@@ -248,8 +149,9 @@ std::span<uint8_t> RawSocketLink::receive_with_recvmsg() {
       ++ignored_;
       continue;
     }
-    ++rx_frames_;
-    // A tag the kernel stripped comes back in PACKET_AUXDATA.
+    // An IEEE 802.1Q tag the kernel (or the NIC) stripped comes back in PACKET_AUXDATA: put
+    // it back where it was, so the frame is processed and answered as it arrived, tagged and
+    // at full length (ETG.1000.4 §5.3, docs/ESC.md).
     for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
       if (c->cmsg_level != SOL_PACKET || c->cmsg_type != PACKET_AUXDATA ||
           c->cmsg_len < CMSG_LEN(sizeof(tpacket_auxdata))) {
@@ -260,8 +162,15 @@ std::span<uint8_t> RawSocketLink::receive_with_recvmsg() {
       if ((aux.tp_status & TP_STATUS_VLAN_VALID) == 0) continue;
       const uint16_t tpid =
           (aux.tp_status & TP_STATUS_VLAN_TPID_VALID) ? aux.tp_vlan_tpid : kEtherTypeVlan;
-      return with_vlan_tag(rx_.data(), len, tpid, aux.tp_vlan_tci);
+      std::memmove(&rx_[kEthTypeOffset + kVlanTag], &rx_[kEthTypeOffset], len - kEthTypeOffset);
+      rx_[kEthTypeOffset] = static_cast<uint8_t>(tpid >> 8);
+      rx_[kEthTypeOffset + 1] = static_cast<uint8_t>(tpid);
+      rx_[kEthTypeOffset + 2] = static_cast<uint8_t>(aux.tp_vlan_tci >> 8);
+      rx_[kEthTypeOffset + 3] = static_cast<uint8_t>(aux.tp_vlan_tci);
+      len += kVlanTag;
+      ++vlan_tagged_;
     }
+    ++rx_frames_;
     return {rx_.data(), len};
   }
 }
