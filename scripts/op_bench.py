@@ -15,6 +15,12 @@ bench/ecat/echo_responder and pinger bench/ecat/wire_pinger). For each slave cou
        busy-poll  both run with --busy-poll; only one spins at a time (the other is stopped with
                   SIGSTOP), alternating rounds; the pinger blocks (2 cores).
      The reply's working counter must be the master's expected one (pysoem expected_wkc).
+     --placement adds "one CPU" to each row: the share of samples, taken every 10 ms during the
+     replay, that found the pinger and rackcat's loop thread last run on the same CPU (off by
+     default: the sampling wakes this script on one of the CPUs it measures). On a 2-vCPU
+     machine the round trip runs in one of two regimes the scheduler picks: on two CPUs the reply
+     has to wake the pinger's (halted) vCPU, on one the pinger's and rackcat's work (the
+     firmware round after the reply included) run in series (docs/PERFORMANCE.md, session 15).
      --cycle-us: 0 replays back to back (each frame as soon as the previous reply came); P > 0
      paces the rounds as a master's cycle does (one frame to each responder every P us), so
      the slaves' work after a reply has the rest of the cycle, as with a real master.
@@ -26,7 +32,7 @@ answering a BRD (working counter = slave count), with RSS and thread count once 
 
     sudo scripts/op_bench.py [--build-dir build] [--slaves 1,16,64,128,256]
         [--modes blocking,busy-poll] [--samples 10000] [--sdo-calls 2000]
-        [--brd-slaves 64,128,256,4096] [--firmware-yield-us N] [--cycle-us 0,1000]
+        [--brd-slaves 64,128,256,4096] [--firmware-yield-us N] [--cycle-us 0,1000] [--placement]
 
 --guest-halt-poll-ns NS (diagnosis, in a KVM guest with the cpuidle-haltpoll driver): sets
 /sys/module/haltpoll/parameters/guest_halt_poll_ns for the run and restores it afterwards.
@@ -177,20 +183,60 @@ def configure(slaves, tmp, attempts=3):
     return out, expected, wkc, length
 
 
-def replay(pinger_path, names, frame_file, count, tmp, warmup=100, period_us=0):
+def last_cpu(pid, tid=None):
+    """The CPU a task last ran on (/proc/PID[/task/TID]/stat field 39), None once it is gone."""
+    path = f"/proc/{pid}/stat" if tid is None else f"/proc/{pid}/task/{tid}/stat"
+    try:
+        return int(Path(path).read_text().rsplit(")", 1)[1].split()[36])
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+def busiest_thread(pid):
+    """The thread of `pid` with the most CPU time: rackcat's loop thread during a replay."""
+    best, best_ticks = None, -1
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            parts = (task / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        ticks = int(parts[11]) + int(parts[12])
+        if ticks > best_ticks:
+            best, best_ticks = task.name, ticks
+    return best
+
+
+def replay(pinger_path, names, frame_file, count, tmp, warmup=100, period_us=0, watch=None):
+    """Replays the frame; with `watch` (a responder's pid) also samples every 10 ms on which CPU
+    the pinger and that responder's busiest thread last ran, and returns the share of samples
+    that found them on the same one under the key "same_cpu" (the placement a 2-vCPU machine
+    runs the round trip in: on one CPU the work of both is in series, on two the reply wakes
+    the pinger's CPU)."""
     out = tmp / "samples"
     cmd = ["ip", "netns", "exec", NS, str(pinger_path), "--iface",
            ",".join(wb.PAIRS[n][1] for n in names), "--frame-file", str(frame_file),
            "--count", str(count), "--warmup", str(warmup), "--samples-out", str(out),
            "--period-us", str(period_us)]
-    r = wb.sh(*cmd, check=False)
-    if r.returncode != 0:
-        raise RuntimeError(f"pinger failed: {r.stderr.strip()}")
-    lines = [json.loads(x) for x in r.stdout.splitlines() if x.strip()]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    same = seen = 0
+    if watch is not None:
+        tid = busiest_thread(watch)
+        while proc.poll() is None:
+            time.sleep(0.01)
+            a, b = last_cpu(proc.pid), last_cpu(watch, tid)
+            if a is not None and b is not None:
+                seen += 1
+                same += a == b
+    stdout, stderr = proc.communicate()
+    if proc.returncode != 0:
+        raise RuntimeError(f"pinger failed: {stderr.strip()}")
+    lines = [json.loads(x) for x in stdout.splitlines() if x.strip()]
     res = {}
     for k, (name, line) in enumerate(zip(names, lines)):
         f = out if len(names) == 1 else Path(f"{out}.{k}")
         res[name] = ([int(x) for x in f.read_text().split()], line["lost"], line["wkc"])
+    if seen:
+        res["same_cpu"] = (same, seen)
     return res
 
 
@@ -204,6 +250,7 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
     samples = {"floor": [], "slave": []}
     lost = {"floor": 0, "slave": 0}
     wkcs = set()
+    placement = [0, 0]  # samples with the pinger and rackcat's loop thread on one CPU, samples
     try:
         if busy:
             floor.proc.send_signal(signal.SIGSTOP)
@@ -215,9 +262,11 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
         per_round = max(1, args.samples // args.rounds)
         if not busy:
             for _ in range(args.rounds):
-                for name, (vals, n_lost, w) in replay(pinger, ["floor", "slave"], frame,
-                                                      per_round, tmp,
-                                                      period_us=cycle_us).items():
+                res = replay(pinger, ["floor", "slave"], frame, per_round, tmp,
+                             period_us=cycle_us,
+                             watch=slave.proc.pid if args.placement else None)
+                placement = [a + b for a, b in zip(placement, res.pop("same_cpu", (0, 0)))]
+                for name, (vals, n_lost, w) in res.items():
                     samples[name] += vals
                     lost[name] += n_lost
                     if name == "slave":
@@ -232,8 +281,11 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
                         procs[name].send_signal(signal.SIGCONT)
                         running = name
                         time.sleep(0.05)
-                    vals, n_lost, w = replay(pinger, [name], frame, per_round, tmp,
-                                             period_us=cycle_us)[name]
+                    res = replay(pinger, [name], frame, per_round, tmp, period_us=cycle_us,
+                                 watch=slave.proc.pid if name == "slave" and args.placement
+                                 else None)
+                    placement = [a + b for a, b in zip(placement, res.pop("same_cpu", (0, 0)))]
+                    vals, n_lost, w = res[name]
                     samples[name] += vals
                     lost[name] += n_lost
                     if name == "slave":
@@ -255,14 +307,17 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
            "floor_us": [wb.pct(samples["floor"], p) for p in (50, 90, 99)],
            "slave_us": [wb.pct(samples["slave"], p) for p in (50, 90, 99)],
            "ratio_p50": s50 / f50, "per_slave_ns": (s50 - f50) * 1000 / slaves,
-           "lost": lost}
+           "lost": lost,
+           "same_cpu_pct": 100 * placement[0] / placement[1] if placement[1] else None}
     report["lrw"].append(row)
     cycle = "b2b" if cycle_us == 0 else f"{cycle_us}us"
     print(f"{mode:9s} {cycle:>7s} {slaves:5d} {length:5d} B  wkc {sorted(wkcs)} (expected {expected})  "
           f"floor {f50:7.1f}  rackcat {s50:7.1f} us p50  x{s50 / f50:5.2f}  "
           f"p99 {row['floor_us'][2]:7.1f} / {row['slave_us'][2]:7.1f}  "
           f"RSS {rss_kib / 1024:6.1f} MiB ({rss_kib / slaves:7.0f} KiB/slave)  "
-          f"threads {threads}  lost {lost['floor']}/{lost['slave']}", flush=True)
+          f"threads {threads}  lost {lost['floor']}/{lost['slave']}"
+          + (f"  one CPU {row['same_cpu_pct']:3.0f} %" if row["same_cpu_pct"] is not None else ""),
+          flush=True)
 
 
 def sdo_run(args, tmp, report):
@@ -335,6 +390,8 @@ def main():
                     help="master cycle times to replay at, us (0 = back to back); e.g. 0,1000")
     ap.add_argument("--guest-halt-poll-ns", type=int, default=None,
                     help="set the guest's haltpoll window for the run (diagnosis; restored after)")
+    ap.add_argument("--placement", action="store_true",
+                    help="sample the CPUs of the pinger and rackcat's loop thread (one CPU %%)")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     if os.geteuid() != 0:
