@@ -148,8 +148,13 @@ def proc_status(pid):
     return int(fields["VmRSS"].split()[0]), int(fields["Threads"])
 
 
+def stat_fields(path):
+    """The fields of a /proc .../stat file after the command name (proc(5): field 3 is [0])."""
+    return Path(path).read_text().rsplit(")", 1)[1].split()
+
+
 def cpu_seconds(pid):
-    parts = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    parts = stat_fields(f"/proc/{pid}/stat")
     return (int(parts[11]) + int(parts[12])) / os.sysconf("SC_CLK_TCK")
 
 
@@ -187,7 +192,7 @@ def last_cpu(pid, tid=None):
     """The CPU a task last ran on (/proc/PID[/task/TID]/stat field 39), None once it is gone."""
     path = f"/proc/{pid}/stat" if tid is None else f"/proc/{pid}/task/{tid}/stat"
     try:
-        return int(Path(path).read_text().rsplit(")", 1)[1].split()[36])
+        return int(stat_fields(path)[36])
     except (OSError, IndexError, ValueError):
         return None
 
@@ -197,7 +202,7 @@ def busiest_thread(pid):
     best, best_ticks = None, -1
     for task in Path(f"/proc/{pid}/task").iterdir():
         try:
-            parts = (task / "stat").read_text().rsplit(")", 1)[1].split()
+            parts = stat_fields(task / "stat")
         except OSError:
             continue
         ticks = int(parts[11]) + int(parts[12])
@@ -206,12 +211,13 @@ def busiest_thread(pid):
     return best
 
 
-def replay(pinger_path, names, frame_file, count, tmp, warmup=100, period_us=0, watch=None):
+def replay(pinger_path, names, frame_file, count, tmp, warmup=100, period_us=0, watch=None,
+           placement=None):
     """Replays the frame; with `watch` (a responder's pid) also samples every 10 ms on which CPU
-    the pinger and that responder's busiest thread last ran, and returns the share of samples
-    that found them on the same one under the key "same_cpu" (the placement a 2-vCPU machine
-    runs the round trip in: on one CPU the work of both is in series, on two the reply wakes
-    the pinger's CPU)."""
+    the pinger and that responder's busiest thread last ran, and adds the samples that found
+    them on the same one and all samples to `placement` ([same, all]): the placement a 2-vCPU
+    machine runs the round trip in (on one CPU the work of both is in series, on two the reply
+    wakes the pinger's CPU)."""
     out = tmp / "samples"
     cmd = ["ip", "netns", "exec", NS, str(pinger_path), "--iface",
            ",".join(wb.PAIRS[n][1] for n in names), "--frame-file", str(frame_file),
@@ -235,8 +241,9 @@ def replay(pinger_path, names, frame_file, count, tmp, warmup=100, period_us=0, 
     for k, (name, line) in enumerate(zip(names, lines)):
         f = out if len(names) == 1 else Path(f"{out}.{k}")
         res[name] = ([int(x) for x in f.read_text().split()], line["lost"], line["wkc"])
-    if seen:
-        res["same_cpu"] = (same, seen)
+    if placement is not None:
+        placement[0] += same
+        placement[1] += seen
     return res
 
 
@@ -264,8 +271,8 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
             for _ in range(args.rounds):
                 res = replay(pinger, ["floor", "slave"], frame, per_round, tmp,
                              period_us=cycle_us,
-                             watch=slave.proc.pid if args.placement else None)
-                placement = [a + b for a, b in zip(placement, res.pop("same_cpu", (0, 0)))]
+                             watch=slave.proc.pid if args.placement else None,
+                             placement=placement)
                 for name, (vals, n_lost, w) in res.items():
                     samples[name] += vals
                     lost[name] += n_lost
@@ -281,11 +288,10 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
                         procs[name].send_signal(signal.SIGCONT)
                         running = name
                         time.sleep(0.05)
-                    res = replay(pinger, [name], frame, per_round, tmp, period_us=cycle_us,
-                                 watch=slave.proc.pid if name == "slave" and args.placement
-                                 else None)
-                    placement = [a + b for a, b in zip(placement, res.pop("same_cpu", (0, 0)))]
-                    vals, n_lost, w = res[name]
+                    vals, n_lost, w = replay(
+                        pinger, [name], frame, per_round, tmp, period_us=cycle_us,
+                        watch=slave.proc.pid if name == "slave" and args.placement else None,
+                        placement=placement)[name]
                     samples[name] += vals
                     lost[name] += n_lost
                     if name == "slave":
