@@ -41,6 +41,21 @@ the pinger's, when a reply arrives while the responder ran elsewhere - costs no 
 The kernel's default is 200000; some VM images set 0 (every idle halts). The table's first
 line says which value was in force.
 
+--kickcat BIN --kickcat-slave JSON puts KickCAT's network_simulator (BIN, built by the user from
+KickCAT's own source; rackcat ships none of it) in the same run as a third peer on a third veth
+pair, every simulated slave built from the slave config JSON (KickCAT's
+simulation/slave_configs/freedom-k64f.json is the one that reproduces issue 16's figures). The
+same pysoem master brings its slaves to OP and its own cyclic frame is captured. Blocking rows
+then add the issue's own method, "medians of alternating rounds": each round also replays
+rackcat's frame to rackcat alone and KickCAT's frame to KickCAT alone, back to back (order
+alternating between rounds), and the row adds both p50s and their ratio. Alone and back to back,
+a responder's work after its reply (rackcat's firmware round, KickCAT's routine() of every
+slave) delays the next frame whenever the master's next frame comes before it is done - and a
+responder that is still busy then does not sleep, so it pays no wake-up. Frame by frame
+interleaving (the floor / rackcat columns) hides the one and adds the other. KickCAT's simulator
+has no busy-poll mode, so busy-poll rows leave it out. The SDO run alternates rackcat and
+KickCAT in four blocks.
+
 Prints one table; --json FILE also writes the numbers.
 """
 import argparse
@@ -173,16 +188,24 @@ class Rackcat(wb.Responder):
         super().__init__(name, cmd, tmp)
 
 
-def configure(slaves, tmp, attempts=3):
-    out = tmp / f"lrw-{slaves}.bin"
+class Kickcat(wb.Responder):
+    """KickCAT's network_simulator with `slaves` copies of one slave config (--kickcat)."""
+
+    def __init__(self, args, slaves, tmp, name="kickcat"):
+        cmd = [str(args.kickcat), "-i", wb.PAIRS["kickcat"][0], "-s"] + [str(args.kickcat_slave)] * slaves
+        super().__init__(name, cmd, tmp)
+
+
+def configure(slaves, tmp, attempts=3, pair="slave"):
+    out = tmp / f"lrw-{pair}-{slaves}.bin"
     for _ in range(attempts):  # SOEM's scan times out now and then on a loaded machine
         r = wb.sh("ip", "netns", "exec", NS, sys.executable, "-c", CONFIGURE,
-                  wb.PAIRS["slave"][1], str(out), str(slaves), check=False)
+                  wb.PAIRS[pair][1], str(out), str(slaves), check=False)
         if r.returncode == 0:
             break
         time.sleep(1)
     if r.returncode != 0:
-        raise RuntimeError(f"pysoem configuration of {slaves} slaves failed: "
+        raise RuntimeError(f"pysoem configuration of {slaves} slaves ({pair}) failed: "
                            f"{r.stderr.strip()[-800:]} {r.stdout.strip()[-200:]}")
     expected, wkc, length = map(int, r.stdout.split()[-3:])
     return out, expected, wkc, length
@@ -213,14 +236,16 @@ def busiest_thread(pid):
 
 def replay(pinger_path, names, frame_file, count, tmp, warmup=100, period_us=0, watch=None,
            placement=None):
-    """Replays the frame; with `watch` (a responder's pid) also samples every 10 ms on which CPU
+    """Replays the frame (or, given a dict, each responder's own); with `watch` (a responder's pid) also samples every 10 ms on which CPU
     the pinger and that responder's busiest thread last ran, and adds the samples that found
     them on the same one and all samples to `placement` ([same, all]): the placement a 2-vCPU
     machine runs the round trip in (on one CPU the work of both is in series, on two the reply
     wakes the pinger's CPU)."""
     out = tmp / "samples"
+    files = frame_file if isinstance(frame_file, dict) else {n: frame_file for n in names}
     cmd = ["ip", "netns", "exec", NS, str(pinger_path), "--iface",
-           ",".join(wb.PAIRS[n][1] for n in names), "--frame-file", str(frame_file),
+           ",".join(wb.PAIRS[n][1] for n in names), "--frame-file",
+           ",".join(str(files[n]) for n in names),
            "--count", str(count), "--warmup", str(warmup), "--samples-out", str(out),
            "--period-us", str(period_us)]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -254,9 +279,11 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
     slave = Rackcat(args, slaves, busy, tmp)
     floor = wb.Responder("floor", [str(echo), "--iface", wb.PAIRS["floor"][0]] +
                          (["--busy-poll"] if busy else []), tmp)
-    samples = {"floor": [], "slave": []}
-    lost = {"floor": 0, "slave": 0}
+    kickcat = Kickcat(args, slaves, tmp) if args.kickcat and not busy else None
+    samples = {"floor": [], "slave": [], "kickcat": [], "alone": []}
+    lost = {"floor": 0, "slave": 0, "kickcat": 0, "alone": 0}
     wkcs = set()
+    kc = {}
     placement = [0, 0]  # samples with the pinger and rackcat's loop thread on one CPU, samples
     try:
         if busy:
@@ -266,18 +293,30 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
         frame, expected, wkc, length = configure(slaves, tmp)
         config_s = time.monotonic() - t0
         rss_kib, threads = proc_status(slave.proc.pid)
+        frames = {"floor": frame, "slave": frame}
+        if kickcat:
+            frames["kickcat"], kc["expected"], _, kc["frame_bytes"] = configure(
+                slaves, tmp, pair="kickcat")
+            kc["rss_kib"], kc["threads"] = proc_status(kickcat.proc.pid)
         per_round = max(1, args.samples // args.rounds)
         if not busy:
-            for _ in range(args.rounds):
-                res = replay(pinger, ["floor", "slave"], frame, per_round, tmp,
+            for rnd in range(args.rounds):
+                res = replay(pinger, ["floor", "slave"], frames, per_round, tmp,
                              period_us=cycle_us,
                              watch=slave.proc.pid if args.placement else None,
                              placement=placement)
+                if kickcat:
+                    # The issue's method: each alone, back to back, alternating rounds.
+                    for name in (("slave", "kickcat") if rnd % 2 == 0 else ("kickcat", "slave")):
+                        one = replay(pinger, [name], frames, per_round, tmp, period_us=cycle_us)
+                        res[name if name == "kickcat" else "alone"] = one[name]
                 for name, (vals, n_lost, w) in res.items():
                     samples[name] += vals
                     lost[name] += n_lost
-                    if name == "slave":
+                    if name in ("slave", "alone"):
                         wkcs.add(w)
+                    if name == "kickcat":
+                        kc.setdefault("wkc", set()).add(w)
         else:
             procs = {"floor": floor.proc, "slave": slave.proc}
             running = "slave"
@@ -299,7 +338,9 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
             for p in procs.values():
                 p.send_signal(signal.SIGCONT)
     finally:
-        for r in (floor, slave):
+        for r in (floor, slave, kickcat):
+            if r is None:
+                continue
             try:
                 r.proc.send_signal(signal.SIGCONT)
                 r.stop()
@@ -315,6 +356,12 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
            "ratio_p50": s50 / f50, "per_slave_ns": (s50 - f50) * 1000 / slaves,
            "lost": lost,
            "same_cpu_pct": 100 * placement[0] / placement[1] if placement[1] else None}
+    if kickcat:
+        k50, a50 = wb.pct(samples["kickcat"], 50), wb.pct(samples["alone"], 50)
+        row["kickcat"] = dict(kc, wkc=sorted(kc.get("wkc", ())), lost=lost["kickcat"],
+                              us=[wb.pct(samples["kickcat"], p) for p in (50, 90, 99)],
+                              rackcat_alone_us=[wb.pct(samples["alone"], p) for p in (50, 90, 99)],
+                              rackcat_alone_lost=lost["alone"], ratio_p50=a50 / k50)
     report["lrw"].append(row)
     cycle = "b2b" if cycle_us == 0 else f"{cycle_us}us"
     print(f"{mode:9s} {cycle:>7s} {slaves:5d} {length:5d} B  wkc {sorted(wkcs)} (expected {expected})  "
@@ -324,30 +371,68 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
           f"threads {threads}  lost {lost['floor']}/{lost['slave']}"
           + (f"  one CPU {row['same_cpu_pct']:3.0f} %" if row["same_cpu_pct"] is not None else ""),
           flush=True)
+    if kickcat:
+        k = row["kickcat"]
+        print(f"{'alone':9s} {cycle:>7s} {'':5s} {k['frame_bytes']:5d} B  wkc {k['wkc']} (expected "
+              f"{k['expected']})  KickCAT {k['us'][0]:7.1f}  rackcat {k['rackcat_alone_us'][0]:7.1f} "
+              f"us p50  rackcat/KickCAT x{k['ratio_p50']:5.2f}  p99 {k['us'][2]:7.1f} / "
+              f"{k['rackcat_alone_us'][2]:7.1f}  KickCAT RSS {k['rss_kib'] / 1024:6.1f} MiB  "
+              f"threads {k['threads']}  lost {k['lost']}/{k['rackcat_alone_lost']}", flush=True)
+
+
+def sdo_calls(pair, calls):
+    """pysoem expedited uploads against the slave on `pair`: (failed, [ns per call])."""
+    r = wb.sh("ip", "netns", "exec", NS, sys.executable, "-c", SDO, wb.PAIRS[pair][1],
+              str(calls), check=False)
+    if r.returncode != 0:
+        raise RuntimeError(f"SDO run ({pair}) failed: {r.stderr.strip()[-800:]}")
+    failed, *t = [int(x) for x in r.stdout.split()]
+    return failed, t
+
+
+def sdo_row(t, failed):
+    return {"calls": len(t), "failed": failed, "p50_us": wb.pct(t, 50), "p90_us": wb.pct(t, 90),
+            "p99_us": wb.pct(t, 99), "mean_us": sum(t) / len(t) / 1000}
 
 
 def sdo_run(args, tmp, report):
     slave = Rackcat(args, 1, False, tmp, name="sdo")
+    kickcat = Kickcat(args, 1, tmp, name="kickcat-sdo") if args.kickcat else None
+    peers = ["slave"] + (["kickcat"] if kickcat else [])
+    times = {p: [] for p in peers}
+    failed = {p: 0 for p in peers}
     try:
         time.sleep(0.5)
-        r = wb.sh("ip", "netns", "exec", NS, sys.executable, "-c", SDO, wb.PAIRS["slave"][1],
-                  str(args.sdo_calls), check=False)
-        if r.returncode != 0:
-            raise RuntimeError(f"SDO run failed: {r.stderr.strip()[-800:]}")
-        failed, *t = [int(x) for x in r.stdout.split()]
+        # With KickCAT, four blocks in the order rackcat, KickCAT, KickCAT, rackcat, so that the
+        # machine's drift over the run falls on both alike.
+        order = peers if not kickcat else ["slave", "kickcat", "kickcat", "slave"]
+        for pair in order:
+            share = args.sdo_calls // (len(order) // len(peers))
+            f, t = sdo_calls(pair, share)
+            failed[pair] += f
+            times[pair] += t
         time.sleep(0.5)
         c0 = cpu_seconds(slave.proc.pid)
         time.sleep(args.idle_seconds)
         idle = (cpu_seconds(slave.proc.pid) - c0) / args.idle_seconds * 100
     finally:
         slave.stop()
-    row = {"calls": len(t), "failed": failed, "p50_us": wb.pct(t, 50), "p90_us": wb.pct(t, 90),
-           "p99_us": wb.pct(t, 99), "mean_us": sum(t) / len(t) / 1000, "idle_cpu_pct": idle}
+        if kickcat:
+            kickcat.stop()
+    row = dict(sdo_row(times["slave"], failed["slave"]), idle_cpu_pct=idle)
+    if kickcat:
+        row["kickcat"] = sdo_row(times["kickcat"], failed["kickcat"])
+        row["ratio_p50"] = row["p50_us"] / row["kickcat"]["p50_us"]
     report["sdo"] = row
-    print(f"SDO upload 0x1018:01, {len(t)} calls ({failed} failed), blocking, unpinned: "
+    print(f"SDO upload 0x1018:01, {row['calls']} calls ({row['failed']} failed), blocking, unpinned: "
           f"p50 {row['p50_us']:.1f} "
           f"p90 {row['p90_us']:.1f} p99 {row['p99_us']:.1f} mean {row['mean_us']:.1f} us; "
           f"idle CPU {idle:.2f} % over {args.idle_seconds} s", flush=True)
+    if kickcat:
+        k = row["kickcat"]
+        print(f"  KickCAT, same run: {k['calls']} calls ({k['failed']} failed) p50 {k['p50_us']:.1f} "
+              f"p90 {k['p90_us']:.1f} p99 {k['p99_us']:.1f} us; rackcat/KickCAT "
+              f"x{row['ratio_p50']:.2f}", flush=True)
 
 
 def brd_run(args, n, tmp, report):
@@ -398,8 +483,21 @@ def main():
                     help="set the guest's haltpoll window for the run (diagnosis; restored after)")
     ap.add_argument("--placement", action="store_true",
                     help="sample the CPUs of the pinger and rackcat's loop thread (one CPU %%)")
+    ap.add_argument("--kickcat", default=None, metavar="BIN",
+                    help="KickCAT's network_simulator as a third peer (blocking rows, SDO)")
+    ap.add_argument("--kickcat-slave", default=None, metavar="JSON",
+                    help="the slave config each KickCAT slave is built from")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
+    if args.kickcat:
+        if not args.kickcat_slave:
+            sys.exit("op_bench: --kickcat needs --kickcat-slave JSON")
+        args.kickcat = Path(args.kickcat).resolve()
+        args.kickcat_slave = Path(args.kickcat_slave).resolve()
+        for f in (args.kickcat, args.kickcat_slave):
+            if not f.is_file():
+                sys.exit(f"op_bench: {f}: no such file")
+        wb.PAIRS["kickcat"] = ("kc-slave", "kc-master")
     if os.geteuid() != 0:
         sys.exit("op_bench: needs root (network namespace, veth pairs, raw sockets)")
     args.build = Path(args.build_dir).resolve()

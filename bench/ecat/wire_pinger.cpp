@@ -4,7 +4,7 @@
 //
 //   wire_pinger --iface IFACE[,IFACE...] --frame brd|lrw [--count N] [--slaves N] [--lrw-bytes B]
 //               [--busy-poll] [--setup-fmmu] [--warmup N] [--samples-out FILE]
-//               [--frame-file FILE] [--period-us P]
+//               [--frame-file FILE[,FILE...]] [--period-us P]
 //
 // --period-us paces the frames as a master's cycle does (ETG.1000.4 §5: the master sends its
 // cyclic frame once per cycle): round i starts at start + i x P (absolute, clock_nanosleep; a
@@ -15,7 +15,9 @@
 // --frame-file replays a captured frame (raw Ethernet bytes, e.g. a master's cyclic LRW frame
 // captured by scripts/op_bench.py) instead of --frame: the source MAC becomes the socket's,
 // the first datagram's index (ETG.1000.4 §5.2) counts frames, and the reported working counter
-// is the first datagram's.
+// is the first datagram's. Several files, one per interface in the same order, give each
+// responder the frame its own master configured (op_bench.py --kickcat: another slave stack's
+// process image is laid out differently).
 //
 // --setup-fmmu first maps B bytes of logical space per slave onto each slave's process RAM
 // (FMMU0, read/write, APWR by position) so that LRW exercises the FMMU path of a real slave.
@@ -233,6 +235,17 @@ bool map_fmmus(Socket& s, int slaves, int lrw_bytes) {
   return true;
 }
 
+// "a,b,c" -> {"a", "b", "c"}; "" -> {""}.
+std::vector<std::string> split_commas(const std::string& list) {
+  std::vector<std::string> parts;
+  for (size_t pos = 0; pos <= list.size();) {
+    const size_t comma = std::min(list.find(',', pos), list.size());
+    parts.push_back(list.substr(pos, comma - pos));
+    pos = comma + 1;
+  }
+  return parts;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -284,11 +297,11 @@ int main(int argc, char** argv) {
   }
   // One socket per interface; several interfaces are pinged in turn, frame by frame, so
   // that responders on them are measured under the same machine noise.
-  std::vector<std::string> ifaces;
-  for (size_t pos = 0; pos <= iface.size();) {
-    const size_t comma = std::min(iface.find(',', pos), iface.size());
-    ifaces.push_back(iface.substr(pos, comma - pos));
-    pos = comma + 1;
+  const std::vector<std::string> ifaces = split_commas(iface);
+  const std::vector<std::string> frame_files = split_commas(frame_file);
+  if (frame_files.size() != 1 && frame_files.size() != ifaces.size()) {
+    std::fprintf(stderr, "wire_pinger: --frame-file takes one file, or one per interface\n");
+    return 2;
   }
   struct Target {
     Socket socket;
@@ -304,7 +317,8 @@ int main(int argc, char** argv) {
     if (!open_socket(ifaces[k], s)) return 2;
     if (setup_fmmu && !map_fmmus(s, slaves, lrw_bytes)) return 1;
     if (!frame_file.empty()) {
-      if (!load_frame(frame_file, s.mac, targets[k].frame)) return 2;
+      const std::string& file = frame_files[frame_files.size() == 1 ? 0 : k];
+      if (!load_frame(file, s.mac, targets[k].frame)) return 2;
       kind = "file";
     } else {
       targets[k].frame =
