@@ -48,7 +48,9 @@ simulation/slave_configs/freedom-k64f.json is the one that reproduces issue 16's
 same pysoem master brings its slaves to OP and its own cyclic frame is captured. Blocking rows
 then add the issue's own method, "medians of alternating rounds": each round also replays
 rackcat's frame to rackcat alone and KickCAT's frame to KickCAT alone, back to back (order
-alternating between rounds), and the row adds both p50s and their ratio. Alone and back to back,
+alternating between rounds), and the row adds both p50s and their ratio. KickCAT's simulator
+is stopped (SIGSTOP) except for its own turns: with no frame its socket polls (recv, a short
+sleep, again), and those wake-ups would change the others' numbers. Alone and back to back,
 a responder's work after its reply (rackcat's firmware round, KickCAT's routine() of every
 slave) delays the next frame whenever the master's next frame comes before it is done - and a
 responder that is still busy then does not sleep, so it pays no wake-up. Frame by frame
@@ -59,6 +61,7 @@ KickCAT in four blocks.
 Prints one table; --json FILE also writes the numbers.
 """
 import argparse
+import contextlib
 import json
 import os
 import signal
@@ -195,6 +198,25 @@ class Kickcat(wb.Responder):
         cmd = [str(args.kickcat), "-i", wb.PAIRS["kickcat"][0], "-s"] + [str(args.kickcat_slave)] * slaves
         super().__init__(name, cmd, tmp)
 
+    # Its socket never sleeps for long: with no frame it polls, recv then a short sleep, over and
+    # over. Left running while the others are measured, those wake-ups keep a vCPU from halting
+    # and change their numbers (rackcat's SDO p50 halves here), so it runs only for its own turns.
+    def pause(self):
+        self.proc.send_signal(signal.SIGSTOP)
+
+    @contextlib.contextmanager
+    def turn(self):
+        self.proc.send_signal(signal.SIGCONT)
+        time.sleep(0.05)
+        try:
+            yield
+        finally:
+            self.pause()
+
+    def stop(self):
+        self.proc.send_signal(signal.SIGCONT)
+        super().stop()
+
 
 def configure(slaves, tmp, attempts=3, pair="slave"):
     out = tmp / f"lrw-{pair}-{slaves}.bin"
@@ -298,6 +320,7 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
             frames["kickcat"], kc["expected"], _, kc["frame_bytes"] = configure(
                 slaves, tmp, pair="kickcat")
             kc["rss_kib"], kc["threads"] = proc_status(kickcat.proc.pid)
+            kickcat.pause()
         per_round = max(1, args.samples // args.rounds)
         if not busy:
             for rnd in range(args.rounds):
@@ -308,7 +331,9 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
                 if kickcat:
                     # The issue's method: each alone, back to back, alternating rounds.
                     for name in (("slave", "kickcat") if rnd % 2 == 0 else ("kickcat", "slave")):
-                        one = replay(pinger, [name], frames, per_round, tmp, period_us=cycle_us)
+                        with kickcat.turn() if name == "kickcat" else contextlib.nullcontext():
+                            one = replay(pinger, [name], frames, per_round, tmp,
+                                         period_us=cycle_us)
                         res[name if name == "kickcat" else "alone"] = one[name]
                 for name, (vals, n_lost, w) in res.items():
                     samples[name] += vals
@@ -403,25 +428,34 @@ def sdo_run(args, tmp, report):
     failed = {p: 0 for p in peers}
     try:
         time.sleep(0.5)
+        if kickcat:
+            kickcat.pause()
         # With KickCAT, four blocks in the order rackcat, KickCAT, KickCAT, rackcat, so that the
         # machine's drift over the run falls on both alike.
         order = peers if not kickcat else ["slave", "kickcat", "kickcat", "slave"]
         for pair in order:
             share = args.sdo_calls // (len(order) // len(peers))
-            f, t = sdo_calls(pair, share)
+            with kickcat.turn() if pair == "kickcat" else contextlib.nullcontext():
+                f, t = sdo_calls(pair, share)
             failed[pair] += f
             times[pair] += t
         time.sleep(0.5)
         c0 = cpu_seconds(slave.proc.pid)
         time.sleep(args.idle_seconds)
         idle = (cpu_seconds(slave.proc.pid) - c0) / args.idle_seconds * 100
+        if kickcat:
+            with kickcat.turn():
+                c0 = cpu_seconds(kickcat.proc.pid)
+                time.sleep(args.idle_seconds)
+                kickcat_idle = (cpu_seconds(kickcat.proc.pid) - c0) / args.idle_seconds * 100
     finally:
         slave.stop()
         if kickcat:
             kickcat.stop()
     row = dict(sdo_row(times["slave"], failed["slave"]), idle_cpu_pct=idle)
     if kickcat:
-        row["kickcat"] = sdo_row(times["kickcat"], failed["kickcat"])
+        row["kickcat"] = dict(sdo_row(times["kickcat"], failed["kickcat"]),
+                              idle_cpu_pct=kickcat_idle)
         row["ratio_p50"] = row["p50_us"] / row["kickcat"]["p50_us"]
     report["sdo"] = row
     print(f"SDO upload 0x1018:01, {row['calls']} calls ({row['failed']} failed), blocking, unpinned: "
@@ -431,8 +465,8 @@ def sdo_run(args, tmp, report):
     if kickcat:
         k = row["kickcat"]
         print(f"  KickCAT, same run: {k['calls']} calls ({k['failed']} failed) p50 {k['p50_us']:.1f} "
-              f"p90 {k['p90_us']:.1f} p99 {k['p99_us']:.1f} us; rackcat/KickCAT "
-              f"x{row['ratio_p50']:.2f}", flush=True)
+              f"p90 {k['p90_us']:.1f} p99 {k['p99_us']:.1f} us, idle CPU {k['idle_cpu_pct']:.2f} %; "
+              f"rackcat/KickCAT x{row['ratio_p50']:.2f}", flush=True)
 
 
 def brd_run(args, n, tmp, report):
