@@ -23,6 +23,7 @@
 
 #include "base/cache_line.hpp"
 #include "base/little_endian.hpp"
+#include "base/short_copy.hpp"
 #include "ecat/clock.hpp"
 #include "ecat/esc/esc_memory.hpp"
 #include "ecat/frame.hpp"
@@ -156,15 +157,40 @@ class Esc {
   // Register and process-RAM access with the ESC's PDI-side rules: PDI-writable registers
   // only (AL status and code, AL event mask, SM PDI control, user RAM), SyncManager buffers
   // with their hand-over (see esc/pdi.cpp). Accesses past 0xFFFF are cut at the end.
-  void pdi_read(uint16_t address, uint8_t* dst, uint16_t len);
+  void pdi_read(uint16_t address, uint8_t* dst, uint16_t len) {
+    // The registers after AL control up to the watchdog status clear no event when read
+    // (pdi_registers_read): below every SyncManager buffer, such a read is a copy. Among them
+    // the AL event request 0x0220, which a firmware reads on every interrupt (ETG.1000.4 §6.5).
+    const uint32_t end = static_cast<uint32_t>(address) + len;
+    if (address >= reg::kAlControl + 2 && end <= reg::kWatchdogStatusProcessData &&
+        end <= sm_first_byte_) {
+      base::copy_bytes(dst, &mem_[address], len);
+      return;
+    }
+    pdi_read_access(address, dst, len);
+  }
   void pdi_write(uint16_t address, const uint8_t* src, uint16_t len);
   // One whole SyncManager buffer in one PDI access (SM `sm`, `len` bytes at `address`, its
   // start): what pdi_read/pdi_write of those bytes do - the first byte opens the buffer, the
   // last completes it (ETG.1000.4 §6.7.1/§6.7.2) - without looking for the SyncManager. When
   // SM `sm` is not enabled with exactly that buffer, or shares bytes with another enabled SM,
   // it is a plain pdi_read/pdi_write.
-  void pdi_read_buffer(uint8_t sm, uint16_t address, uint8_t* dst, uint16_t len);
-  void pdi_write_buffer(uint8_t sm, uint16_t address, const uint8_t* src, uint16_t len);
+  void pdi_read_buffer(uint8_t sm, uint16_t address, uint8_t* dst, uint16_t len) {
+    // The whole buffer of an SM alone in its bytes, in process RAM (no register side effects):
+    // the same effects as the byte-wise access, found without the search.
+    if (sm < kSyncManagers && whole_sm_buffer(sm, address, len)) {
+      sm_read_buffer<false>(sm, dst);
+    } else {
+      pdi_read(address, dst, len);
+    }
+  }
+  void pdi_write_buffer(uint8_t sm, uint16_t address, const uint8_t* src, uint16_t len) {
+    if (sm < kSyncManagers && whole_sm_buffer(sm, address, len)) {
+      sm_write_buffer<false>(sm, src);
+    } else {
+      pdi_write(address, src, len);
+    }
+  }
   // The IRQ output: AL event request 0x0220 & AL event mask 0x0204.
   bool pdi_irq() const;
   // The ESC was reset (power-on or 'R','E','S' to 0x0040) since the last call: the reset
@@ -453,6 +479,8 @@ class Esc {
   bool pdi_buffer_write(uint16_t address, const uint8_t* src, uint16_t len);
   void pdi_buffer_read_done(uint16_t address, uint16_t len);
   void pdi_registers_written(uint16_t address, const uint8_t* src, uint16_t len, bool sii_owned);
+  // pdi_read for every other access: register side effects and SyncManager buffers.
+  void pdi_read_access(uint16_t address, uint8_t* dst, uint16_t len);
   void pdi_registers_read(uint16_t address, uint16_t len);
   // sii.cpp: EEPROM interface.
   void sii_load_image();

@@ -27,8 +27,10 @@
 //     (mailbox full; buffered: the newest of the three buffers, its index in status bits 5:4).
 //     A full mailbox refuses PDI writes.
 //   A SyncManager that is disabled or deactivated takes no PDI buffer access either.
-//   pdi_read_buffer/pdi_write_buffer are the same access for one whole buffer: a firmware's
-//   SM2 read and SM3 write each cycle, without looking for the SyncManager.
+//   pdi_read_buffer/pdi_write_buffer (esc.hpp) are the same access for one whole buffer: a
+//   firmware's SM2 read and SM3 write each cycle, without looking for the SyncManager. A read
+//   of registers without a read side effect (the AL event request among them) is a plain copy
+//   there too (Esc::pdi_read); pdi_read_access below does the rest.
 //   The emulated ESC keeps one image per buffered SM: the datagram engine and the PDI run one
 //   after the other, never inside each other's access, so a complete access sees what the
 //   three buffers of a real ESC would give it.
@@ -68,7 +70,7 @@ bool Esc::pdi_irq() const {
   return (le::get32(&mem_[reg::kAlEventRequest]) & le::get32(&mem_[reg::kAlEventMask])) != 0;
 }
 
-void Esc::pdi_read(uint16_t address, uint8_t* dst, uint16_t len) {
+void Esc::pdi_read_access(uint16_t address, uint8_t* dst, uint16_t len) {
   len = static_cast<uint16_t>(std::min<uint32_t>(len, reg::kAddressSpace - address));
   if (len == 0) return;
   base::copy_bytes(dst, &mem_[address], len);
@@ -165,24 +167,6 @@ bool Esc::pdi_buffer_write(uint16_t address, const uint8_t* src, uint16_t len) {
   std::memcpy(&mem_[address], src, len);
   for_each_sm_meeting(address, end, [&](int n) { sm_buffer_access(n, address, end, true); });
   return true;
-}
-
-void Esc::pdi_read_buffer(uint8_t n, uint16_t address, uint8_t* dst, uint16_t len) {
-  // The whole buffer of an SM alone in its bytes, in process RAM (no register side effects):
-  // the same effects as the byte-wise access, found without the search.
-  if (n < kSyncManagers && whole_sm_buffer(n, address, len)) {
-    sm_read_buffer<false>(n, dst);
-  } else {
-    pdi_read(address, dst, len);
-  }
-}
-
-void Esc::pdi_write_buffer(uint8_t n, uint16_t address, const uint8_t* src, uint16_t len) {
-  if (n < kSyncManagers && whole_sm_buffer(n, address, len)) {
-    sm_write_buffer<false>(n, src);
-  } else {
-    pdi_write(address, src, len);
-  }
 }
 
 }  // namespace rackcat::ecat

@@ -106,6 +106,7 @@ void Firmware::poll() {
       // The device follows SYNC0; without it the slave cannot keep its cycle (ETG.1000.6
       // Table 11, 0x002C).
       dc_synchronised_ = false;
+      update_polling();
       esm_error(EsmState::SafeOp, 0x002C, EsmState::SafeOp);
     }
   }
@@ -118,7 +119,8 @@ void Firmware::poll() {
     // frames in between.
     if (sm0 || activation || app_.mailbox_pending()) mailbox_.service(state_, sm0, activation);
   }
-  update_polling();
+  // polls_status_ follows the state, the SyncManagers taken with it, the DC supervision and the
+  // mailbox's running flag: esm_enter and power_on recompute it, the DC check above too.
 }
 
 }  // namespace rackcat::ecat

@@ -99,7 +99,8 @@ class Firmware {
     bool enabled = false;  // activate bit 0, non-zero length inside the address space
   };
   void read_sms();
-  // Recomputes polls_status_ after the state or the SyncManagers changed.
+  // Recomputes polls_status_ after the state, the SyncManagers taken, the DC supervision or the
+  // mailbox's running flag changed (esm_enter, power_on, the DC check in poll).
   void update_polling();
 
   // esm.cpp

@@ -96,6 +96,29 @@ TEST(PdiBuffer, ReadSwitchesOnTheLastByteNotBefore) {
   EXPECT_EQ(c.status(2) & (kRead | kReadOpen), kRead);
 }
 
+// A register read without side effect is a plain copy (Esc::pdi_read), but only below every
+// SyncManager buffer: a master may place a buffer among those registers (0x0122-0x043F; the
+// bytes are registers still, so what it writes there is not kept), and reading it there still
+// opens and completes it.
+TEST(PdiBuffer, BufferPlacedAmongRegistersIsStillOneForThePdi) {
+  ChipMaster c;
+  constexpr uint16_t kLow = 0x0300;
+  c.sm(2, kLow, kOutLen, kOutputsControl);
+  const auto out = pattern(kOutLen, 0x40);
+  ASSERT_EQ(c.apwr(kLow, out), 1);
+  EXPECT_NE(c.esc.read32(0x0220) & 0x0400, 0u);
+  std::vector<uint8_t> got(kOutLen);
+  c.esc.pdi_read(kLow, got.data(), kOutLen);
+  EXPECT_EQ(c.esc.read32(0x0220) & 0x0400, 0u);  // the event is taken
+  EXPECT_EQ(c.esc.read8(0x0805 + 16) & (kWritten | kRead | kReadOpen), kRead);
+  // The AL event request itself reads as it is, and reading it clears nothing.
+  ASSERT_EQ(c.apwr(kLow, out), 1);
+  uint8_t events[4];
+  c.esc.pdi_read(0x0220, events, 4);
+  EXPECT_NE(events[1] & 0x04, 0);
+  EXPECT_NE(c.esc.read32(0x0220) & 0x0400, 0u);
+}
+
 TEST(PdiBuffer, PartialMailboxReadKeepsItFullForTheMaster) {
   Chip c;
   EscPdi pdi(c.esc);
