@@ -188,6 +188,7 @@ void Segment::after_frame() {
     const size_t k = cursor_;
     cursor_ = k + 1 == round_span_ ? 0 : k + 1;
     --round_left_;
+    if (round_left_ != 0) slaves_[cursor_]->prefetch_firmware();
     slaves_[k]->run_firmware_if_due();
   }
 }
