@@ -171,9 +171,17 @@ def stat_fields(path):
     return Path(path).read_text().rsplit(")", 1)[1].split()
 
 
-def cpu_seconds(pid):
-    parts = stat_fields(f"/proc/{pid}/stat")
-    return (int(parts[11]) + int(parts[12])) / os.sysconf("SC_CLK_TCK")
+def cpu_ticks(path):
+    """User + system time of a /proc .../stat file (fields 14 and 15), in clock ticks."""
+    parts = stat_fields(path)
+    return int(parts[11]) + int(parts[12])
+
+
+def idle_cpu_pct(pid, seconds):
+    """The share of one CPU that `pid` uses over `seconds` with no traffic."""
+    t0 = cpu_ticks(f"/proc/{pid}/stat")
+    time.sleep(seconds)
+    return (cpu_ticks(f"/proc/{pid}/stat") - t0) / os.sysconf("SC_CLK_TCK") / seconds * 100
 
 
 class Rackcat(wb.Responder):
@@ -247,10 +255,9 @@ def busiest_thread(pid):
     best, best_ticks = None, -1
     for task in Path(f"/proc/{pid}/task").iterdir():
         try:
-            parts = stat_fields(task / "stat")
+            ticks = cpu_ticks(task / "stat")
         except OSError:
             continue
-        ticks = int(parts[11]) + int(parts[12])
         if ticks > best_ticks:
             best, best_ticks = task.name, ticks
     return best
@@ -258,11 +265,11 @@ def busiest_thread(pid):
 
 def replay(pinger_path, names, frame_file, count, tmp, warmup=100, period_us=0, watch=None,
            placement=None):
-    """Replays the frame (or, given a dict, each responder's own); with `watch` (a responder's pid) also samples every 10 ms on which CPU
-    the pinger and that responder's busiest thread last ran, and adds the samples that found
-    them on the same one and all samples to `placement` ([same, all]): the placement a 2-vCPU
-    machine runs the round trip in (on one CPU the work of both is in series, on two the reply
-    wakes the pinger's CPU)."""
+    """Replays the frame (or, given a dict, each responder's own); with `watch` (a responder's
+    pid) also samples every 10 ms on which CPU the pinger and that responder's busiest thread
+    last ran, and adds the samples that found them on the same one and all samples to
+    `placement` ([same, all]): the placement a 2-vCPU machine runs the round trip in (on one
+    CPU the work of both is in series, on two the reply wakes the pinger's CPU)."""
     out = tmp / "samples"
     files = frame_file if isinstance(frame_file, dict) else {n: frame_file for n in names}
     cmd = ["ip", "netns", "exec", NS, str(pinger_path), "--iface",
@@ -433,21 +440,17 @@ def sdo_run(args, tmp, report):
         # With KickCAT, four blocks in the order rackcat, KickCAT, KickCAT, rackcat, so that the
         # machine's drift over the run falls on both alike.
         order = peers if not kickcat else ["slave", "kickcat", "kickcat", "slave"]
+        share = args.sdo_calls * len(peers) // len(order)
         for pair in order:
-            share = args.sdo_calls // (len(order) // len(peers))
             with kickcat.turn() if pair == "kickcat" else contextlib.nullcontext():
                 f, t = sdo_calls(pair, share)
             failed[pair] += f
             times[pair] += t
         time.sleep(0.5)
-        c0 = cpu_seconds(slave.proc.pid)
-        time.sleep(args.idle_seconds)
-        idle = (cpu_seconds(slave.proc.pid) - c0) / args.idle_seconds * 100
+        idle = idle_cpu_pct(slave.proc.pid, args.idle_seconds)
         if kickcat:
             with kickcat.turn():
-                c0 = cpu_seconds(kickcat.proc.pid)
-                time.sleep(args.idle_seconds)
-                kickcat_idle = (cpu_seconds(kickcat.proc.pid) - c0) / args.idle_seconds * 100
+                kickcat_idle = idle_cpu_pct(kickcat.proc.pid, args.idle_seconds)
     finally:
         slave.stop()
         if kickcat:
