@@ -3,7 +3,7 @@
 # private network namespace: the slave on one end, ethercrab on the other, nothing on the host's
 # interfaces. Runs a single slave and a segment of 16 (override with --sizes).
 #
-#   scripts/ethercrab_interop.sh [--slave "CMD ARGS"] [--mode rackcat|testslave]
+#   scripts/ethercrab_interop.sh [--slave "CMD ARGS"] [--mode rackcat|testslave|op]
 #                                [--sizes "1 16"] [--cycles N] [-- extra ethercrab-interop args]
 #   scripts/ethercrab_interop.sh --test-line [--cycles N]
 #
@@ -17,7 +17,8 @@
 #           build/ecat_wire_slave (mode testslave: no CoE, whole output
 #           image echoed on the inputs).
 # --mode    which checks ethercrab-interop runs (default: rackcat for rackcat, testslave for
-#           the test slave, guessed from the command name).
+#           the test slave, guessed from the command name); op: only up to OP and --cycles
+#           cycles, for lines longer than SOEM configures (interop/ethercrab/src/op.rs).
 # Environment: BUILD_DIR (default build), CARGO_JOBS (default 2), SLAVE_START_SECONDS (default 10,
 # how long to wait for the slave to come up), MASTER_TIMEOUT_SECONDS (default 600, per run),
 # RUST_LOG (ethercrab's log level).

@@ -9,6 +9,11 @@ bench/ecat/echo_responder and pinger bench/ecat/wire_pinger). For each slave cou
      slaves stay in OP once it leaves, SAFEOP, OP) brings the slaves to OP and the master's
      own cyclic frame (its LRW, as send_processdata puts it on the wire) is captured from a
      packet socket on the master end. The master exits without touching the AL state.
+     From 200 slaves on (SOEM's EC_MAXSLAVE; --master chooses) the master is ethercrab
+     (interop/ethercrab --mode op, built with cargo when missing): same steps, and its image
+     comes in LRW datagrams of 1,100 bytes, one per frame - 1,024 tiny racks take two. The
+     replay then sends a cycle's frames back to back and times the last reply (wire_pinger
+     FILE+FILE), as SOEM does with an image larger than one frame.
   2. RSS and thread count of rackcat in OP (/proc/PID/status).
   3. wire_pinger --frame-file replays the captured frame:
        blocking   both responders sleep in the kernel; the pinger alternates frame by frame;
@@ -30,7 +35,8 @@ unpinned, timed one by one in Python (time.perf_counter_ns around the call), and
 time over --idle-seconds with no traffic. Then (--brd-slaves): rackcat with that many slaves
 answering a BRD (working counter = slave count), with RSS and thread count once it answers.
 
-    sudo scripts/op_bench.py [--build-dir build] [--slaves 1,16,64,128,256]
+    sudo scripts/op_bench.py [--build-dir build] [--slaves 1,16,64,128,199,256,1024]
+        [--master auto|pysoem|ethercrab] [--ethercrab BIN]
         [--modes blocking,busy-poll] [--samples 10000] [--sdo-calls 2000]
         [--brd-slaves 64,128,256,4096] [--firmware-yield-us N] [--cycle-us 0,1000] [--placement]
 
@@ -64,6 +70,7 @@ import argparse
 import contextlib
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -76,6 +83,8 @@ import wire_bench as wb  # noqa: E402  (namespace, responders, pinger)
 
 REPO = wb.REPO
 NS = wb.NS
+# SOEM's EC_MAXSLAVE: pysoem configures fewer slaves than this.
+PYSOEM_MAX = 200
 
 CONFIGURE = r"""
 import socket, sys, time, pysoem
@@ -124,6 +133,59 @@ while pos + 12 <= end:  # datagrams: 10-byte header, data, 2-byte working counte
     pos += 12 + (n & 0x7FF)
 open(out, "wb").write(frame)
 print(f"{m.expected_wkc} {wkc} {len(frame)}")
+"""
+
+# From SOEM's EC_MAXSLAVE (200) on, ethercrab configures the line (interop/ethercrab, --mode
+# op: OP with the process-data watchdog off, then a few hundred cycles of its tx_rx, then it
+# exits and the line stays in OP). Each cycle ethercrab sends its group image as LRW datagrams
+# of up to 1,100 bytes, one per frame, each followed by AL status reads of the SubDevices (its
+# state checks). As with SOEM, a packet socket on the master end sees only the replies (the
+# frame with the source-MAC bit set, inputs filled in, working counters counted; ETG.1000.4
+# 5.1, 5.2); the replay keeps their LRW datagrams, one per frame, with the working counter set
+# back to 0: the master's cyclic LRW, in as many frames as its image needs.
+CONFIGURE_ETHERCRAB = r"""
+import socket, subprocess, sys, time
+iface, out, n, binary = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+p = subprocess.Popen([binary, "--iface", iface, "--mode", "op", "--expect-slaves", str(n),
+                      "--cycles", "300", "-v"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                     text=True)
+log, replies = [], {}
+for line in p.stdout:
+    log.append(line)
+    if line.startswith("PASS OP reached"):  # then 300 cycles of about 1 ms: capture 0.2 s
+        cap = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(0x88A4))
+        cap.bind((iface, 0x88A4)); cap.settimeout(0.05)
+        end = time.monotonic() + 0.2
+        while time.monotonic() < end:
+            try:
+                data = cap.recv(2048)
+            except socket.timeout:
+                continue
+            pos, stop = 16, 16 + (int.from_bytes(data[14:16], "little") & 0x7FF)
+            if not data[6] & 0x02 or pos + 12 > stop or data[pos] != 0x0C:  # a reply, LRW first
+                continue
+            length = int.from_bytes(data[pos + 6:pos + 8], "little") & 0x7FF
+            address = int.from_bytes(data[pos + 2:pos + 6], "little")
+            wkc = int.from_bytes(data[pos + 10 + length:pos + 12 + length], "little")
+            replies[address] = (bytes(data[pos + 10:pos + 10 + length]), wkc)
+        cap.close()
+if p.wait() != 0:
+    sys.exit("ethercrab --mode op failed:\n" + "".join(log[-20:]))
+op = [l.split() for l in log if l.startswith("op:")][0]
+image, expected = int(op[4]) + int(op[6]), int(op[10])
+files, covered, wkc, total = [], 0, 0, 0
+for k, address in enumerate(sorted(replies)):
+    data, reply_wkc = replies[address]
+    header = bytes(6 * [0xFF] + 6 * [0] + [0x88, 0xA4])  # the pinger puts its own source MAC
+    ecat = (10 + len(data) + 2) | 0x1000  # length, type 1 (datagrams)
+    dgram = bytes([0x0C, 0]) + address.to_bytes(4, "little") + len(data).to_bytes(2, "little")
+    frame = header + ecat.to_bytes(2, "little") + dgram + b"\0\0" + data + b"\0\0"
+    path = f"{out}.{k}"
+    open(path, "wb").write(frame)
+    files.append(path); covered += len(data); wkc += reply_wkc; total += len(frame)
+if covered != image:
+    sys.exit(f"captured LRW datagrams cover {covered} of the {image}-byte image")
+print(f"{'+'.join(files)} {expected} {wkc} {total}")
 """
 
 SDO = r"""
@@ -226,19 +288,42 @@ class Kickcat(wb.Responder):
         super().stop()
 
 
-def configure(slaves, tmp, attempts=3, pair="slave"):
+def configure(args, slaves, tmp, attempts=3, pair="slave"):
+    """Brings `slaves` slaves on `pair` to OP with a real master and captures its cyclic LRW.
+    Returns (frame file, or FILE+FILE+... for a cycle of several frames; the master's expected
+    working counter; the working counter seen; frame bytes)."""
     out = tmp / f"lrw-{pair}-{slaves}.bin"
+    use_ethercrab = args.master == "ethercrab" or (args.master == "auto" and slaves >= PYSOEM_MAX)
     for _ in range(attempts):  # SOEM's scan times out now and then on a loaded machine
-        r = wb.sh("ip", "netns", "exec", NS, sys.executable, "-c", CONFIGURE,
-                  wb.PAIRS[pair][1], str(out), str(slaves), check=False)
+        if use_ethercrab:
+            r = wb.sh("ip", "netns", "exec", NS, sys.executable, "-c", CONFIGURE_ETHERCRAB,
+                      wb.PAIRS[pair][1], str(out), str(slaves), str(ethercrab_binary(args)),
+                      check=False)
+        else:
+            r = wb.sh("ip", "netns", "exec", NS, sys.executable, "-c", CONFIGURE,
+                      wb.PAIRS[pair][1], str(out), str(slaves), check=False)
         if r.returncode == 0:
             break
         time.sleep(1)
     if r.returncode != 0:
-        raise RuntimeError(f"pysoem configuration of {slaves} slaves ({pair}) failed: "
+        master = "ethercrab" if use_ethercrab else "pysoem"
+        raise RuntimeError(f"{master} configuration of {slaves} slaves ({pair}) failed: "
                            f"{r.stderr.strip()[-800:]} {r.stdout.strip()[-200:]}")
+    if use_ethercrab:
+        frames, expected, wkc, length = r.stdout.split()[-4:]
+        return frames, int(expected), int(wkc), int(length)
     expected, wkc, length = map(int, r.stdout.split()[-3:])
     return out, expected, wkc, length
+
+
+def ethercrab_binary(args):
+    """interop/ethercrab's program (the ethercrab master), built with cargo when missing."""
+    binary = Path(args.ethercrab)
+    if not binary.is_file():
+        cargo = shutil.which("cargo") or str(Path.home() / ".cargo" / "bin" / "cargo")
+        wb.sh(cargo, "build", "--release", "--locked", "--manifest-path",
+              str(REPO / "interop" / "ethercrab" / "Cargo.toml"))
+    return binary
 
 
 def last_cpu(pid, tid=None):
@@ -319,13 +404,13 @@ def lrw_run(args, slaves, mode, tmp, report, cycle_us=0):
             floor.proc.send_signal(signal.SIGSTOP)
         time.sleep(0.3)
         t0 = time.monotonic()
-        frame, expected, wkc, length = configure(slaves, tmp)
+        frame, expected, wkc, length = configure(args, slaves, tmp)
         config_s = time.monotonic() - t0
         rss_kib, threads = proc_status(slave.proc.pid)
         frames = {"floor": frame, "slave": frame}
         if kickcat:
             frames["kickcat"], kc["expected"], _, kc["frame_bytes"] = configure(
-                slaves, tmp, pair="kickcat")
+                args, slaves, tmp, pair="kickcat")
             kc["rss_kib"], kc["threads"] = proc_status(kickcat.proc.pid)
             kickcat.pause()
         per_round = max(1, args.samples // args.rounds)
@@ -503,8 +588,15 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build-dir", default=str(REPO / "build"))
     ap.add_argument("--config", default=str(REPO / "examples" / "tiny-rack.yaml"))
-    # pysoem (SOEM's EC_MAXSLAVE) configures at most 200 slaves: 199 is the largest OP run.
-    ap.add_argument("--slaves", default="1,16,64,128,199")
+    # pysoem (SOEM's EC_MAXSLAVE) configures fewer than 200 slaves; ethercrab the rest.
+    ap.add_argument("--slaves", default="1,16,64,128,199,256,1024")
+    ap.add_argument("--master", choices=("auto", "pysoem", "ethercrab"), default="auto",
+                    help="the master that configures the slaves and whose LRW is replayed "
+                    "(auto: pysoem below 200 slaves, ethercrab from 200)")
+    ap.add_argument("--ethercrab", metavar="BIN",
+                    default=str(REPO / "interop" / "ethercrab" / "target" / "release" /
+                                "ethercrab-interop"),
+                    help="interop/ethercrab's program (built with cargo when missing)")
     ap.add_argument("--modes", default="blocking,busy-poll")
     ap.add_argument("--samples", type=int, default=10000)
     ap.add_argument("--rounds", type=int, default=6)

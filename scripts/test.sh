@@ -78,6 +78,10 @@ do_ethercrab() {
   bash scripts/ethercrab_interop.sh
   # the user's own line (docs/LINE.md): coupler, DI, DO, CoE terminal, rack; DO->DI wired
   bash scripts/ethercrab_interop.sh --test-line --cycles 2000
+  # a line longer than SOEM configures (EC_MAXSLAVE 200): 256 tiny racks to OP, 2,000 cycles
+  # with the working counter checked on each (ethercrab --mode op, as scripts/op_bench.py uses it)
+  bash scripts/ethercrab_interop.sh --mode op --sizes 256 --cycles 2000 \
+    --slave "build/rackcat run --config examples/tiny-rack.yaml"
 }
 do_conformance() {
   . scripts/python.sh

@@ -10,6 +10,9 @@
 //
 //   BM_RackLineCycle/N/dc        outputs change every frame
 //   BM_RackLineCycleSteady/N/dc  the master repeats its outputs (op_bench's replay)
+// N = 16, 199 (pysoem's largest), 256 and 1,024 (ethercrab's, op_bench from 200 slaves on):
+// an image above 1,100 bytes goes in several frames of one LRW datagram each, as ethercrab
+// cuts it, each followed by its round (1,024: two frames per cycle).
 // dc = 0: the LRW alone, the frame pysoem sends without config_dc (op_bench); dc = 1: with the
 // FRMW 0x0910 that SOEM adds to the frame once DC is configured (docs/INTEROP.md).
 // scripts/callgrind_line.sh counts their instructions per slave.
@@ -72,6 +75,10 @@ std::vector<uint8_t> fmmu(uint32_t logical, uint16_t length, uint16_t physical, 
   return f;
 }
 
+// ethercrab's LRW datagram size (interop/ethercrab PDU_PAYLOAD): op_bench's replay above 199
+// slaves, where ethercrab configures the line.
+constexpr size_t kLrwChunk = 1100;
+
 // `rackcat run --slaves N --config examples/tiny-rack.yaml`'s line, in OP.
 class RackLine {
  public:
@@ -133,24 +140,34 @@ class RackLine {
     for (size_t k = 0; k < n; ++k) {
       if ((master_->request_state(Line::station(k), 0x04) & 0x1F) != 0x04) return "no SAFEOP";
     }
-    std::vector<uint8_t> work = frame(0, false);
-    segment_->process(work);
-    segment_->after_frame();
+    for (std::vector<uint8_t> work : cycle(0, false)) {
+      segment_->process(work);
+      segment_->after_frame();
+    }
     for (size_t k = 0; k < n; ++k) {
       if ((master_->request_state(Line::station(k), 0x08) & 0x1F) != 0x08) return "no OP";
     }
     return {};
   }
 
-  // The master's cyclic frame: LRW over every slave's outputs (all `value`) and inputs, plus
-  // FRMW 0x0910 from the first slave (the DC reference) with `dc`.
-  std::vector<uint8_t> frame(uint8_t value, bool dc) const {
+  // The master's cyclic frames: LRW over every slave's outputs (all `value`) and inputs, cut
+  // into datagrams of at most kLrwChunk bytes, one per frame, as ethercrab sends an image
+  // larger than one frame (1,024 slaves: two); plus FRMW 0x0910 from the first slave (the DC
+  // reference) in the first frame with `dc`.
+  std::vector<std::vector<uint8_t>> cycle(uint8_t value, bool dc) const {
     std::vector<uint8_t> image(racks_.size() * (outputs_ + inputs_), 0);
     std::memset(image.data(), value, racks_.size() * outputs_);
-    FrameBuilder b;
-    b.add_logical(Command::Lrw, 0, image);
-    if (dc) b.add(Command::Frmw, Line::station(0), 0x0910, std::vector<uint8_t>(8, 0));
-    return b.build();
+    std::vector<std::vector<uint8_t>> frames;
+    for (size_t at = 0; at < image.size(); at += kLrwChunk) {
+      const size_t end = std::min(image.size(), at + kLrwChunk);
+      FrameBuilder b;
+      b.add_logical(Command::Lrw, static_cast<uint32_t>(at),
+                    std::vector<uint8_t>(image.begin() + static_cast<long>(at),
+                                         image.begin() + static_cast<long>(end)));
+      if (dc && at == 0) b.add(Command::Frmw, Line::station(0), 0x0910, std::vector<uint8_t>(8, 0));
+      frames.push_back(b.build());
+    }
+    return frames;
   }
   // A master that does not combine them into an LRW: LWR of every slave's outputs (all
   // `value`), then, in a frame of its own, LRD of every slave's inputs.
@@ -195,13 +212,19 @@ void run(benchmark::State& state, bool changing) {
     return;
   }
   line.segment().set_deferred_firmware(true);
-  const std::vector<std::vector<uint8_t>> frames = {line.frame(0x5A, dc),
-                                                    line.frame(changing ? 0xA5 : 0x5A, dc)};
-  std::vector<uint8_t> work = frames[0];
+  const std::vector<std::vector<uint8_t>> cycles[2] = {line.cycle(0x5A, dc),
+                                                       line.cycle(changing ? 0xA5 : 0x5A, dc)};
+  std::vector<std::vector<uint8_t>> work = cycles[0];
   size_t k = 0;
-  for (auto _ : state) rack_line_cycle(line.segment(), frames[k++ & 1], work);
-  if (line.first_wkc(work) != 3 * n) state.SkipWithError("unexpected LRW working counter");
+  for (auto _ : state) {
+    const auto& frames = cycles[k++ & 1];
+    for (size_t f = 0; f < frames.size(); ++f) rack_line_cycle(line.segment(), frames[f], work[f]);
+  }
+  size_t wkc = 0;
+  for (const auto& f : work) wkc += line.first_wkc(f);
+  if (wkc != 3 * n) state.SkipWithError("unexpected LRW working counter");
   state.counters["slaves"] = static_cast<double>(n);
+  state.counters["frames"] = static_cast<double>(work.size());
   state.counters["ns_per_slave"] =
       benchmark::Counter(static_cast<double>(state.iterations()) * static_cast<double>(n),
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
@@ -238,8 +261,12 @@ void BM_RackLineLwrLrdSteady(benchmark::State& state) {
 }
 BENCHMARK(BM_RackLineLwrLrdSteady)->Arg(16)->Arg(199)->Unit(benchmark::kMicrosecond);
 
-BENCHMARK(BM_RackLineCycle)->ArgsProduct({{16, 199}, {0, 1}})->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_RackLineCycleSteady)->ArgsProduct({{16, 199}, {0, 1}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RackLineCycle)
+    ->ArgsProduct({{16, 199, 256, 1024}, {0, 1}})
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RackLineCycleSteady)
+    ->ArgsProduct({{16, 199, 256, 1024}, {0, 1}})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace rackcat::ecat::test

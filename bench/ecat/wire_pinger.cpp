@@ -4,7 +4,7 @@
 //
 //   wire_pinger --iface IFACE[,IFACE...] --frame brd|lrw [--count N] [--slaves N] [--lrw-bytes B]
 //               [--busy-poll] [--setup-fmmu] [--warmup N] [--samples-out FILE]
-//               [--frame-file FILE[,FILE...]] [--period-us P]
+//               [--frame-file FILE[+FILE...][,FILE...]] [--period-us P]
 //
 // --period-us paces the frames as a master's cycle does (ETG.1000.4 §5: the master sends its
 // cyclic frame once per cycle): round i starts at start + i x P (absolute, clock_nanosleep; a
@@ -17,7 +17,10 @@
 // the first datagram's index (ETG.1000.4 §5.2) counts frames, and the reported working counter
 // is the first datagram's. Several files, one per interface in the same order, give each
 // responder the frame its own master configured (op_bench.py --kickcat: another slave stack's
-// process image is laid out differently).
+// process image is laid out differently). FILE+FILE+... is one cycle of several frames (a
+// process image larger than one frame, e.g. ethercrab's LRW datagrams of 1,024 slaves): they
+// are sent one after the other with consecutive datagram indexes, the round trip ends with the
+// last reply, and the working counter reported is the sum of the frames'.
 //
 // --setup-fmmu first maps B bytes of logical space per slave onto each slave's process RAM
 // (FMMU0, read/write, APWR by position) so that LRW exercises the FMMU path of a real slave.
@@ -51,6 +54,7 @@ constexpr uint8_t kCmdApwr = 0x02;
 constexpr uint8_t kCmdBrd = 0x07;
 constexpr uint8_t kCmdLrw = 0x0C;
 constexpr int kTimeoutNs = 10'000'000;
+constexpr size_t kMaxFramesPerCycle = 16;
 
 uint64_t now_ns() {
   timespec ts{};
@@ -126,13 +130,21 @@ struct Socket {
   bool busy = false;
 };
 
-// Sends the frame and waits for its reply. Returns the round trip in ns, or -1 on timeout.
-int64_t round_trip(Socket& s, Frame& f, uint8_t index, uint16_t& wkc_out) {
-  f.bytes[17] = index;
+// Sends a cycle's frames (datagram indexes index, index + 1, ...) one after the other, as a
+// master does when its process image needs several frames, and waits for every reply. Returns
+// the time until the last reply in ns, or -1 on timeout; `wkc_out` is the sum of the frames'
+// first-datagram working counters.
+int64_t round_trip(Socket& s, std::vector<Frame>& frames, uint8_t index, uint32_t& wkc_out) {
   static uint8_t rx[2048];
   const uint64_t t0 = now_ns();
-  if (send(s.fd, f.bytes.data(), f.bytes.size(), 0) < 0) return -1;
-  for (;;) {
+  for (size_t k = 0; k < frames.size(); ++k) {
+    frames[k].bytes[17] = static_cast<uint8_t>(index + k);
+    if (send(s.fd, frames[k].bytes.data(), frames[k].bytes.size(), 0) < 0) return -1;
+  }
+  uint32_t wkc = 0;
+  std::vector<bool> answered(frames.size(), false);
+  size_t pending = frames.size();
+  while (pending > 0) {
     ssize_t n;
     if (s.busy) {
       n = recv(s.fd, rx, sizeof(rx), MSG_DONTWAIT);
@@ -149,14 +161,18 @@ int64_t round_trip(Socket& s, Frame& f, uint8_t index, uint16_t& wkc_out) {
       n = recv(s.fd, rx, sizeof(rx), MSG_DONTWAIT);
       if (n < 0) continue;
     }
-    const uint64_t t1 = now_ns();
-    // A reply: our frame with the ESC's source-MAC bit set and the same datagram index.
-    if (n >= static_cast<ssize_t>(f.bytes.size()) && (rx[6] & 0x02) && rx[17] == index &&
-        std::memcmp(rx + 7, s.mac + 1, 5) == 0) {
-      wkc_out = get16(rx + f.wkc_offset);
-      return static_cast<int64_t>(t1 - t0);
+    // A reply: one of our frames with the ESC's source-MAC bit set and its datagram index.
+    if (n < 18 || !(rx[6] & 0x02) || std::memcmp(rx + 7, s.mac + 1, 5) != 0) continue;
+    const size_t k = static_cast<uint8_t>(rx[17] - index);
+    if (k >= frames.size() || answered[k] || n < static_cast<ssize_t>(frames[k].bytes.size())) {
+      continue;
     }
+    answered[k] = true;
+    --pending;
+    wkc += get16(rx + frames[k].wkc_offset);
   }
+  wkc_out = wkc;
+  return static_cast<int64_t>(now_ns() - t0);
 }
 
 // Waits until clock time `t` (now_ns's clock): spinning for a busy-poll pinger, else asleep.
@@ -210,7 +226,7 @@ bool open_socket(const std::string& iface, Socket& s) {
 // FMMU0 (0x0600, ETG.1000.4 Table 57) of every slave: logical start, length, start bit 0,
 // stop bit 7, physical 0x1000, physical start bit 0, type read+write (3), activate.
 bool map_fmmus(Socket& s, int slaves, int lrw_bytes) {
-  uint16_t wkc = 0;
+  uint32_t wkc = 0;
   for (int pos = 0; pos < slaves; ++pos) {
     std::vector<uint8_t> fmmu(16, 0);
     put32(fmmu.data(), static_cast<uint32_t>(pos * lrw_bytes));
@@ -221,7 +237,7 @@ bool map_fmmus(Socket& s, int slaves, int lrw_bytes) {
     fmmu[10] = 0;
     fmmu[11] = 3;
     fmmu[12] = 1;
-    Frame f = build_frame(s.mac, kCmdApwr, static_cast<uint16_t>(-pos), 0x0600, fmmu);
+    std::vector<Frame> f{build_frame(s.mac, kCmdApwr, static_cast<uint16_t>(-pos), 0x0600, fmmu)};
     // Idempotent register write: retried, so one late reply on a busy machine is no error.
     bool answered = false;
     for (int attempt = 0; attempt < 20 && !answered; ++attempt) {
@@ -235,13 +251,13 @@ bool map_fmmus(Socket& s, int slaves, int lrw_bytes) {
   return true;
 }
 
-// "a,b,c" -> {"a", "b", "c"}; "" -> {""}.
-std::vector<std::string> split_commas(const std::string& list) {
+// split("a,b,c", ',') -> {"a", "b", "c"}; split("", ',') -> {""}.
+std::vector<std::string> split(const std::string& list, char separator) {
   std::vector<std::string> parts;
   for (size_t pos = 0; pos <= list.size();) {
-    const size_t comma = std::min(list.find(',', pos), list.size());
-    parts.push_back(list.substr(pos, comma - pos));
-    pos = comma + 1;
+    const size_t end = std::min(list.find(separator, pos), list.size());
+    parts.push_back(list.substr(pos, end - pos));
+    pos = end + 1;
   }
   return parts;
 }
@@ -297,18 +313,18 @@ int main(int argc, char** argv) {
   }
   // One socket per interface; several interfaces are pinged in turn, frame by frame, so
   // that responders on them are measured under the same machine noise.
-  const std::vector<std::string> ifaces = split_commas(iface);
-  const std::vector<std::string> frame_files = split_commas(frame_file);
+  const std::vector<std::string> ifaces = split(iface, ',');
+  const std::vector<std::string> frame_files = split(frame_file, ',');
   if (frame_files.size() != 1 && frame_files.size() != ifaces.size()) {
     std::fprintf(stderr, "wire_pinger: --frame-file takes one file, or one per interface\n");
     return 2;
   }
   struct Target {
     Socket socket;
-    Frame frame;
+    std::vector<Frame> frames;  // one cycle: sent together, the round trip ends with the last reply
     std::vector<int64_t> samples;
     int lost = 0;
-    uint16_t wkc = 0;
+    uint32_t wkc = 0;
   };
   std::vector<Target> targets(ifaces.size());
   for (size_t k = 0; k < ifaces.size(); ++k) {
@@ -318,14 +334,21 @@ int main(int argc, char** argv) {
     if (setup_fmmu && !map_fmmus(s, slaves, lrw_bytes)) return 1;
     if (!frame_file.empty()) {
       const std::string& file = frame_files[frame_files.size() == 1 ? 0 : k];
-      if (!load_frame(file, s.mac, targets[k].frame)) return 2;
+      for (const std::string& part : split(file, '+')) {
+        targets[k].frames.emplace_back();
+        if (!load_frame(part, s.mac, targets[k].frames.back())) return 2;
+      }
+      if (targets[k].frames.size() > kMaxFramesPerCycle) {
+        std::fprintf(stderr, "wire_pinger: at most %zu frames per cycle\n", kMaxFramesPerCycle);
+        return 2;
+      }
       kind = "file";
     } else {
-      targets[k].frame =
+      targets[k].frames.push_back(
           kind == "brd"
               ? build_frame(s.mac, kCmdBrd, 0, 0x0000, std::vector<uint8_t>(2, 0))
               : build_frame(s.mac, kCmdLrw, 0, 0,
-                            std::vector<uint8_t>(static_cast<size_t>(lrw_bytes * slaves), 0x5A));
+                            std::vector<uint8_t>(static_cast<size_t>(lrw_bytes * slaves), 0x5A)));
     }
     targets[k].samples.reserve(static_cast<size_t>(count));
   }
@@ -339,7 +362,11 @@ int main(int argc, char** argv) {
     for (size_t j = 0; j < targets.size(); ++j) {
       // Alternate the order too, so no target always goes first after the other.
       Target& t = targets[(i % 2) ? targets.size() - 1 - j : j];
-      const int64_t rtt = round_trip(t.socket, t.frame, static_cast<uint8_t>(i & 0x7F), t.wkc);
+      // Each cycle's frames take consecutive datagram indexes below 0x80 (0xF0 is the FMMU
+      // setup's), so a late reply of an earlier cycle is never taken for one of this cycle.
+      const size_t per = t.frames.size();
+      const auto index = static_cast<uint8_t>((static_cast<size_t>(i) % (0x80 / per)) * per);
+      const int64_t rtt = round_trip(t.socket, t.frames, index, t.wkc);
       if (i < warmup) continue;
       if (rtt < 0) {
         ++t.lost;

@@ -6,6 +6,7 @@
 
 mod logger;
 mod loopback;
+mod op;
 mod options;
 mod rack;
 mod raw_coe;
@@ -34,6 +35,9 @@ const MAX_FRAMES: usize = 16;
 /// LRW payload per frame: ethercrab cuts the group image into datagrams of this size.
 const PDU_PAYLOAD: usize = 1100;
 const MAX_PDU_DATA: usize = PduStorage::element_size(PDU_PAYLOAD);
+
+/// Stack of `--mode op`'s thread (see main).
+const OP_STACK_BYTES: usize = 256 << 20;
 
 static PDU_STORAGE: PduStorage<MAX_FRAMES, MAX_PDU_DATA> = PduStorage::new();
 
@@ -118,7 +122,22 @@ fn main() -> ExitCode {
         failures: Vec::new(),
     };
     let started = Instant::now();
-    let outcome = futures_lite::future::block_on(run(&md, &opts, &mut report));
+    let outcome = if opts.mode == Mode::Op {
+        // A group of op::OP_MAX_SUBDEVICES lives in the future's state, larger than a main
+        // thread's stack: it runs on a thread of its own with room for it.
+        std::thread::scope(|s| {
+            std::thread::Builder::new()
+                .stack_size(OP_STACK_BYTES)
+                .spawn_scoped(s, || {
+                    futures_lite::future::block_on(op::bring_to_op(&md, &opts, &mut report))
+                })
+                .map_err(|e| format!("cannot start the configurator thread: {e}"))?
+                .join()
+                .map_err(|_| "the configurator thread panicked".to_string())?
+        })
+    } else {
+        futures_lite::future::block_on(run(&md, &opts, &mut report))
+    };
     if let Err(e) = outcome {
         report.fail(format!("stopped: {e}"));
     }
@@ -238,7 +257,8 @@ fn check_sii(i: usize, sd: &SubDevice, info: &SiiInfo, o: &Options, r: &mut Repo
         ),
     );
     match o.mode {
-        Mode::Line => {}
+        // --mode op never reads the SII here (op.rs).
+        Mode::Line | Mode::Op => {}
         Mode::Rackcat => {
             r.check(
                 info.mailbox_protocols() & 0x04 != 0,
@@ -1055,8 +1075,9 @@ async fn run(md: &MainDevice<'_>, o: &Options, r: &mut Report) -> Result<(), Str
             o.wires.clone()
         } else {
             match o.mode {
-                // Line mode: one check over the whole line, built below.
-                Mode::Line => Vec::new(),
+                // Line mode: one check over the whole line, built below (--mode op never
+                // gets here: op.rs).
+                Mode::Line | Mode::Op => Vec::new(),
                 Mode::TestSlave => loopback::identity_wires(out_len, in_len),
                 Mode::Rackcat => match &layouts[i] {
                     Some(layout) => {

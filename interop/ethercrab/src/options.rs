@@ -13,6 +13,9 @@ pub enum Mode {
     /// what each device's SII lists); `--wire` offsets are bits of the concatenated output
     /// and input images of all SubDevices in line order, so a wire may cross devices.
     Line,
+    /// A configurator for benchmarks (op.rs): a line of any length up to 4,096 to OP with the
+    /// process-data watchdog off, `--cycles` cycles, then exit leaving it in OP.
+    Op,
 }
 
 #[derive(Debug, Clone)]
@@ -50,11 +53,14 @@ usage: ethercrab-interop --iface IFACE [options]
   --iface IFACE            network interface (raw socket; needs CAP_NET_RAW)
   --expect-slaves N        fail unless exactly N SubDevices answer
   --cycles N               process-data cycles in OP (default 10000)
-  --mode testslave|rackcat|line
+  --mode testslave|rackcat|line|op
                            testslave: no CoE, whole output image echoed on inputs;
                            rackcat: CoE/SDO info checks, loopback-wired DO->DI (default);
                            line: devices of any kind (rackcat run --line), --wire offsets
-                           in the concatenated images of all SubDevices (cross-device wires)
+                           in the concatenated images of all SubDevices (cross-device wires);
+                           op: a benchmark's configurator: up to 4,096 SubDevices to OP with
+                           the process-data watchdog off, --cycles cycles (working counter
+                           checked), one `op:` line with the image, exit leaving them in OP
   --expect-products P,P,.. product code of each SubDevice in order (0x.. for hex)
   --cycle-us N             cycle period in microseconds (default 1000)
   --hold N                 cycles each output pattern is held (default 4); the echo must
@@ -159,7 +165,8 @@ impl Options {
                         "testslave" => Mode::TestSlave,
                         "rackcat" => Mode::Rackcat,
                         "line" => Mode::Line,
-                        m => return Err(format!("unknown mode {m} (testslave|rackcat|line)")),
+                        "op" => Mode::Op,
+                        m => return Err(format!("unknown mode {m} (testslave|rackcat|line|op)")),
                     }
                 }
                 "--cycle-us" => {
@@ -252,6 +259,13 @@ mod tests {
         assert_eq!(parse_object("0x2000:4").unwrap(), (0x2000, 4));
         assert_eq!(parse_object("4096:0x0a").unwrap(), (0x1000, 10));
         assert!(parse_object("0x12345:0").is_err());
+    }
+
+    #[test]
+    fn op_mode_is_the_benchmark_configurator() {
+        let o = Options::parse(args(&["--iface", "x", "--mode", "op", "--cycles", "300"])).unwrap();
+        assert_eq!(o.mode, Mode::Op);
+        assert_eq!(o.cycles, 300);
     }
 
     #[test]
