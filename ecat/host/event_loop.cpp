@@ -44,6 +44,12 @@ uint64_t monotonic_ns() {
   return static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<uint64_t>(ts.tv_nsec);
 }
 
+uint64_t realtime_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<uint64_t>(ts.tv_nsec);
+}
+
 void EventLoop::install_stop_signal_handler() {
   struct sigaction sa {};
   sa.sa_handler = on_stop_signal;
@@ -112,23 +118,42 @@ bool EventLoop::take_stop_signal() {
 }
 
 void EventLoop::handle_frame(std::span<uint8_t> frame) {
+  const uint64_t replied = answer(frame);
+  if (!after_frame_) return;
+  // The rest of a burst first. A frame that reached the socket before this reply left was
+  // sent by a master that had not seen the reply: SOEM sends a process image larger than one
+  // frame as several frames back to back and then collects the replies. Nothing in those can
+  // depend on what the firmware makes of this frame - a real ESC answers each frame as it
+  // passes while its firmware runs beside it - so they are answered now, and the one round
+  // after the last covers them all (Segment::process). A frame sent once the master had the
+  // reply (the next cycle, a mailbox poll) still finds every frame's work done.
+  for (auto next = link_.try_receive_sent_before(replied); !next.empty();
+       next = link_.try_receive_sent_before(replied)) {
+    ++burst_frames_;
+    (void)answer(next);
+  }
+  work_done_ns_ = 0;
+  run_slice();
+}
+
+uint64_t EventLoop::answer(std::span<uint8_t> frame) {
   ++frames_;
   if (options_.pcap != nullptr) options_.pcap->write(frame);
-  if (!on_frame_) return;
+  if (!on_frame_) return 0;
   const size_t reply = on_frame_(frame);
   // The yield window starts before the send: sending on a veth wakes the master in the
   // same system call, and the scheduler may run it before this thread returns - a clock read
-  // after the send could then be later than the master's next frame.
+  // after the send could then be later than the master's next frame. The same holds for the
+  // burst's bound (handle_frame), on the clock of the kernel's receive timestamps.
+  uint64_t sent = 0;
   if (after_frame_) frame_done_ns_ = monotonic_ns();
   if (reply != 0 && reply <= frame.size()) {
+    if (after_frame_) sent = realtime_ns();
     const auto out = frame.first(reply);
     link_.send(out);
     if (options_.pcap != nullptr) options_.pcap->write(out);
   }
-  if (after_frame_) {
-    work_done_ns_ = 0;
-    run_slice();
-  }
+  return sent;
 }
 
 void EventLoop::run_slice() {

@@ -17,6 +17,14 @@
 // on its CPU - the delivery of the very frames it waits for - and ethercrab with 16 slaves lost
 // a PDU after 30 ms in about half of its runs that way (base/real_time.hpp).
 //
+// Bursts: the frames a master sent before it could have seen a reply - the kernel's receive
+// timestamp is earlier than the moment that reply left (RawSocketLink::try_receive_sent_before)
+// - are answered right after it, before its after-frame work: SOEM sends a process image
+// larger than one frame as several frames back to back and collects the replies after, and a
+// real ESC answers each of them as it passes, whatever its firmware is doing. One round of work
+// then follows the last of them. A frame that came after the reply left still waits for the
+// work (below), so a master that reacts to a reply always sees the firmware's reaction.
+//
 // After-frame work (set_after_frame_work) runs in slices after the reply; between slices - once
 // the work has had Options::work_before_yield_ns and for Options::yield_window_ns after the
 // reply - the loop takes a frame that is waiting (a
@@ -61,6 +69,8 @@ class TimerSource {
 };
 
 uint64_t monotonic_ns();
+// CLOCK_REALTIME nanoseconds: the clock of the kernel's receive timestamps.
+uint64_t realtime_ns();
 
 class EventLoop {
  public:
@@ -126,9 +136,16 @@ class EventLoop {
   bool running() const { return running_.load(std::memory_order_relaxed); }
   int stop_signal() const { return stop_signal_; }  // the signal that ended run(), or 0
   uint64_t frames_handled() const { return frames_; }
+  // Frames answered before the after-frame work of the frame ahead of them in their burst.
+  uint64_t burst_frames() const { return burst_frames_; }
 
  private:
+  // A frame, the rest of its burst, then the first slice of after-frame work.
   void handle_frame(std::span<uint8_t> frame);
+  // Processes and answers one frame; returns when its reply was sent (realtime_ns(), taken
+  // just before the send) when there is after-frame work, else 0 (also when it sent none: a
+  // master saw nothing, so no burst follows it).
+  uint64_t answer(std::span<uint8_t> frame);
   // One step of pending after-frame work: a waiting frame (true; only within the yield
   // window after the last frame), else one slice (false).
   bool work_slice();
@@ -153,6 +170,7 @@ class EventLoop {
   std::atomic<bool> running_{false};
   int stop_signal_ = 0;
   uint64_t frames_ = 0;
+  uint64_t burst_frames_ = 0;
   std::mutex posted_mutex_;
   std::vector<std::function<void()>> posted_;
   std::vector<std::function<void()>> running_posted_;

@@ -10,6 +10,7 @@
 #include <unistd.h>
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 
 namespace rackcat::ecat {
 namespace {
@@ -23,6 +24,29 @@ constexpr size_t kEthHeader = 14;
 constexpr size_t kVlanTag = 4;
 constexpr uint16_t kEtherTypeVlan = 0x8100;
 constexpr size_t kEthTypeOffset = 12;
+// Control messages of one receive: the receive timestamp (SO_TIMESTAMPNS, which the kernel
+// puts first) and the VLAN tag (PACKET_AUXDATA).
+constexpr size_t kControlBytes = CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(tpacket_auxdata));
+
+// The control message of one level and type that a receive returned, with room for a T, copied
+// out; false when the kernel gave none.
+template <typename T>
+bool control_message(msghdr& msg, int level, int type, T& out) {
+  for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+    if (c->cmsg_level == level && c->cmsg_type == type && c->cmsg_len >= CMSG_LEN(sizeof(T))) {
+      std::memcpy(&out, CMSG_DATA(c), sizeof(T));
+      return true;
+    }
+  }
+  return false;
+}
+
+// The kernel's receive timestamp of a packet (CLOCK_REALTIME ns), 0 when it gave none.
+uint64_t receive_timestamp_ns(msghdr& msg) {
+  timespec ts{};
+  if (!control_message(msg, SOL_SOCKET, SCM_TIMESTAMPNS, ts)) return 0;
+  return static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<uint64_t>(ts.tv_nsec);
+}
 
 std::string errno_text(int err) {
   return std::strerror(err);
@@ -88,6 +112,8 @@ RawSocketLink::RawSocketLink(const std::string& interface_name) : name_(interfac
     // Not available on every kernel; both only save work.
     (void)setsockopt(fd_, SOL_PACKET, PACKET_IGNORE_OUTGOING, &one, sizeof(one));
     (void)setsockopt(fd_, SOL_PACKET, PACKET_QDISC_BYPASS, &one, sizeof(one));
+    // Receive timestamps, for try_receive_sent_before(); without them that finds no frame.
+    (void)setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &one, sizeof(one));
     // The VLAN tag of a tagged frame, which the kernel strips before we see the frame.
     if (setsockopt(fd_, SOL_PACKET, PACKET_AUXDATA, &one, sizeof(one)) < 0) {
       fail_open(name_, "PACKET_AUXDATA", errno);
@@ -122,57 +148,85 @@ RawSocketLink::~RawSocketLink() {
 }
 
 std::span<uint8_t> RawSocketLink::try_receive() {
+  return receive(kAnyTime);
+}
+
+std::span<uint8_t> RawSocketLink::try_receive_sent_before(uint64_t realtime_ns) {
+  return receive(realtime_ns);
+}
+
+std::span<uint8_t> RawSocketLink::receive(uint64_t sent_before) {
   for (;;) {
-    sockaddr_ll from{};
-    // Room for a tag the kernel took off (below): the frame is received 4 bytes short of the
-    // buffer.
-    iovec iov{rx_.data(), rx_.size() - kVlanTag};
-    alignas(cmsghdr) uint8_t control[CMSG_SPACE(sizeof(tpacket_auxdata))];
-    msghdr msg{};
-    msg.msg_name = &from;
-    msg.msg_namelen = sizeof(from);
-    msg.msg_iov = &iov;
-    msg.msg_iovlen = 1;
-    msg.msg_control = control;
-    msg.msg_controllen = sizeof(control);
-    const ssize_t n = ::recvmsg(fd_, &msg, MSG_DONTWAIT | MSG_TRUNC);
-    if (n < 0) {
-      // EAGAIN: nothing pending. EINTR: a signal; the caller's loop looks at it.
-      // Anything else (ENETDOWN while the interface goes down) also means "no frame now".
-      return {};
-    }
-    size_t len = static_cast<size_t>(n);
-    // Same checks as the kernel filter, for kernels where it could not be attached.
-    if (from.sll_pkttype == PACKET_OUTGOING || len < kEthHeader || len > iov.iov_len ||
-        rx_[kEthTypeOffset] != (kEtherTypeEcat >> 8) ||
-        rx_[kEthTypeOffset + 1] != (kEtherTypeEcat & 0xFF)) {
-      ++ignored_;
-      continue;
-    }
-    // An IEEE 802.1Q tag the kernel (or the NIC) stripped comes back in PACKET_AUXDATA: put
-    // it back where it was, so the frame is processed and answered as it arrived, tagged and
-    // at full length (ETG.1000.4 §5.3, docs/ESC.md).
-    for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
-      if (c->cmsg_level != SOL_PACKET || c->cmsg_type != PACKET_AUXDATA ||
-          c->cmsg_len < CMSG_LEN(sizeof(tpacket_auxdata))) {
+    if (sent_before != kAnyTime && !next_arrived_before(sent_before)) return {};
+    switch (receive_one()) {
+      case Received::Frame:
+        return {rx_.data(), rx_len_};
+      case Received::Skipped:
         continue;
-      }
-      tpacket_auxdata aux{};
-      std::memcpy(&aux, CMSG_DATA(c), sizeof(aux));
-      if ((aux.tp_status & TP_STATUS_VLAN_VALID) == 0) continue;
-      const uint16_t tpid =
-          (aux.tp_status & TP_STATUS_VLAN_TPID_VALID) ? aux.tp_vlan_tpid : kEtherTypeVlan;
-      std::memmove(&rx_[kEthTypeOffset + kVlanTag], &rx_[kEthTypeOffset], len - kEthTypeOffset);
-      rx_[kEthTypeOffset] = static_cast<uint8_t>(tpid >> 8);
-      rx_[kEthTypeOffset + 1] = static_cast<uint8_t>(tpid);
-      rx_[kEthTypeOffset + 2] = static_cast<uint8_t>(aux.tp_vlan_tci >> 8);
-      rx_[kEthTypeOffset + 3] = static_cast<uint8_t>(aux.tp_vlan_tci);
-      len += kVlanTag;
-      ++vlan_tagged_;
+      case Received::Nothing:
+        return {};
     }
-    ++rx_frames_;
-    return {rx_.data(), len};
   }
+}
+
+bool RawSocketLink::next_arrived_before(uint64_t realtime_ns) {
+  // The next packet's receive timestamp, without taking the packet (no data copied); the
+  // receive that follows takes exactly that packet: this thread is the socket's only reader.
+  alignas(cmsghdr) uint8_t control[kControlBytes];
+  msghdr msg{};
+  msg.msg_control = control;
+  msg.msg_controllen = sizeof(control);
+  if (::recvmsg(fd_, &msg, MSG_DONTWAIT | MSG_PEEK | MSG_TRUNC) < 0) return false;
+  const uint64_t arrived = receive_timestamp_ns(msg);
+  return arrived != 0 && arrived < realtime_ns;
+}
+
+RawSocketLink::Received RawSocketLink::receive_one() {
+  sockaddr_ll from{};
+  // Room for a tag the kernel took off (below): the frame is received 4 bytes short of the
+  // buffer.
+  iovec iov{rx_.data(), rx_.size() - kVlanTag};
+  alignas(cmsghdr) uint8_t control[kControlBytes];
+  msghdr msg{};
+  msg.msg_name = &from;
+  msg.msg_namelen = sizeof(from);
+  msg.msg_iov = &iov;
+  msg.msg_iovlen = 1;
+  msg.msg_control = control;
+  msg.msg_controllen = sizeof(control);
+  const ssize_t n = ::recvmsg(fd_, &msg, MSG_DONTWAIT | MSG_TRUNC);
+  if (n < 0) {
+    // EAGAIN: nothing pending. EINTR: a signal; the caller's loop looks at it.
+    // Anything else (ENETDOWN while the interface goes down) also means "no frame now".
+    return Received::Nothing;
+  }
+  size_t len = static_cast<size_t>(n);
+  // Same checks as the kernel filter, for kernels where it could not be attached.
+  if (from.sll_pkttype == PACKET_OUTGOING || len < kEthHeader || len > iov.iov_len ||
+      rx_[kEthTypeOffset] != (kEtherTypeEcat >> 8) ||
+      rx_[kEthTypeOffset + 1] != (kEtherTypeEcat & 0xFF)) {
+    ++ignored_;
+    return Received::Skipped;
+  }
+  // An IEEE 802.1Q tag the kernel (or the NIC) stripped comes back in PACKET_AUXDATA: put
+  // it back where it was, so the frame is processed and answered as it arrived, tagged and
+  // at full length (ETG.1000.4 §5.3, docs/ESC.md).
+  tpacket_auxdata aux{};
+  if (control_message(msg, SOL_PACKET, PACKET_AUXDATA, aux) &&
+      (aux.tp_status & TP_STATUS_VLAN_VALID) != 0) {
+    const uint16_t tpid =
+        (aux.tp_status & TP_STATUS_VLAN_TPID_VALID) ? aux.tp_vlan_tpid : kEtherTypeVlan;
+    std::memmove(&rx_[kEthTypeOffset + kVlanTag], &rx_[kEthTypeOffset], len - kEthTypeOffset);
+    rx_[kEthTypeOffset] = static_cast<uint8_t>(tpid >> 8);
+    rx_[kEthTypeOffset + 1] = static_cast<uint8_t>(tpid);
+    rx_[kEthTypeOffset + 2] = static_cast<uint8_t>(aux.tp_vlan_tci >> 8);
+    rx_[kEthTypeOffset + 3] = static_cast<uint8_t>(aux.tp_vlan_tci);
+    len += kVlanTag;
+    ++vlan_tagged_;
+  }
+  ++rx_frames_;
+  rx_len_ = len;
+  return Received::Frame;
 }
 
 bool RawSocketLink::send(std::span<const uint8_t> frame) {

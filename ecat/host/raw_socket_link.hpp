@@ -57,6 +57,13 @@ class RawSocketLink {
   // the next receive.
   std::span<uint8_t> try_receive();
 
+  // Like try_receive(), but only a frame that reached this socket before `realtime_ns`
+  // (CLOCK_REALTIME nanoseconds, against the kernel's receive timestamp, SO_TIMESTAMPNS): the
+  // event loop's test for "sent by a master that had not yet seen our last reply". Empty when
+  // nothing is pending, when the next frame came at or after `realtime_ns` (it stays queued for
+  // try_receive()) or when the kernel gives no timestamp.
+  std::span<uint8_t> try_receive_sent_before(uint64_t realtime_ns);
+
   // Sends a complete Ethernet frame (header included, without FCS). Returns false when the
   // kernel refused it (the error is counted, the caller carries on: a lost reply is what a
   // real line does with a damaged frame, and the master retries).
@@ -75,11 +82,21 @@ class RawSocketLink {
   uint64_t send_errors() const { return tx_errors_; }
 
  private:
+  static constexpr uint64_t kAnyTime = UINT64_MAX;
+  // The next EtherCAT frame, skipping other packets; with sent_before, only while the next
+  // packet arrived before that time (next_arrived_before).
+  std::span<uint8_t> receive(uint64_t sent_before);
+  bool next_arrived_before(uint64_t realtime_ns);
+  enum class Received { Frame, Skipped, Nothing };
+  // One recvmsg: a frame into rx_ (its length in rx_len_), a packet that is not one, or none.
+  Received receive_one();
+
   std::string name_;
   int fd_ = -1;
   int ifindex_ = 0;
   std::array<uint8_t, 6> mac_{};
   alignas(base::kCacheLine) std::array<uint8_t, kMaxFrame> rx_{};
+  size_t rx_len_ = 0;
   uint64_t rx_frames_ = 0;
   uint64_t tx_frames_ = 0;
   uint64_t ignored_ = 0;

@@ -2,10 +2,14 @@
 // (capabilities, uid), raw frames on the loopback interface, and bounded waits.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <arpa/inet.h>
 #include <linux/if_packet.h>
 #include <net/if.h>
 #include <poll.h>
+#include <sched.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -14,6 +18,7 @@
 #include <cstring>
 #include <functional>
 #include <span>
+#include <thread>
 #include <vector>
 
 #include "ecat/host/raw_socket_link.hpp"
@@ -85,6 +90,48 @@ class RawSender {
  private:
   int fd_ = -1;
 };
+
+// The kernel turns receive timestamps on for the whole system a moment after the first socket
+// asks for them (a deferred static key, net_enable_timestamp): a frame queued before that is
+// stamped only when it is read. Tests of RawSocketLink::try_receive_sent_before wait for it;
+// rackcat opens its link long before a master's first frame.
+inline void wait_for_receive_timestamps() {
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+}
+
+// Brings interface `name` up or down (SIOCSIFFLAGS); false when the kernel refused.
+inline bool set_up(const char* name, bool up) {
+  const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return false;
+  ifreq ifr{};
+  std::strncpy(ifr.ifr_name, name, IFNAMSIZ - 1);
+  bool ok = ioctl(fd, SIOCGIFFLAGS, &ifr) == 0;
+  if (ok) {
+    ifr.ifr_flags = static_cast<short>(up ? (ifr.ifr_flags | IFF_UP) : (ifr.ifr_flags & ~IFF_UP));
+    ok = ioctl(fd, SIOCSIFFLAGS, &ifr) == 0;
+  }
+  close(fd);
+  return ok;
+}
+
+// Runs fn in a child process with a network namespace of its own, its loopback interface up
+// and quiet: no other test's frames. Returns fn's result; 90 when the namespace could not be
+// made (the test is then skipped).
+inline int in_own_network(const std::function<int()>& fn) {
+  return in_child([&fn] {
+    if (unshare(CLONE_NEWNET) != 0 || !set_up("lo", true)) return 90;
+    return fn();
+  });
+}
+
+// Runs a test body in a network namespace of its own (in_own_network) and reports its result;
+// skips where the process cannot open a raw socket or make the namespace.
+inline void expect_ok_in_own_network(const std::function<int()>& body) {
+  if (!testutil::can_open_raw_socket()) GTEST_SKIP() << "needs root or CAP_NET_RAW";
+  const int status = in_own_network(body);
+  if (status == 90) GTEST_SKIP() << "cannot make a network namespace";
+  EXPECT_EQ(status, 0);
+}
 
 // Receives from the link until a frame satisfies pred, or 2 s pass (then returns empty).
 inline std::vector<uint8_t> receive_matching(

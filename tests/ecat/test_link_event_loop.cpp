@@ -5,6 +5,7 @@
 #include <pthread.h>
 #include <sched.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -277,6 +278,66 @@ TEST_P(LinkEventLoop, AfterFrameWorkOutsideTheYieldWindowFinishesFirst) {
   // (On lo the loop also receives its own first reply, which it does not answer but follows
   // with a slice too: at least kSlices.)
   EXPECT_GE(slices_at_second.load(), kSlices);
+}
+
+// A burst (frames the master sent before it could have seen a reply, as SOEM sends a process
+// image larger than one frame): all of it is answered before the first frame's after-frame
+// work, which then runs once for all. Here the three frames are queued before the loop starts;
+// the work is 20 slices of 100 µs, none of which may come before the last reply. In a network
+// namespace of its own: another test's frame on lo would start the work of its own.
+TEST_P(LinkEventLoop, FramesOfABurstAreAnsweredBeforeTheWorkOfTheFirst) {
+  const WaitMode wait = GetParam();
+  testutil::expect_ok_in_own_network([wait] {
+    RawSocketLink link("lo");
+    EventLoop loop(link,
+                   {.wait = wait, .pcap = nullptr, .stop_on_signals = false, .yield_window_ns = 0});
+    constexpr int kSlices = 20;
+    std::atomic<int> slices{0};
+    std::array<std::atomic<int>, 3> slices_at{-1, -1, -1};
+    loop.set_frame_handler([&](std::span<uint8_t> frame) {
+      const size_t n = answer(frame);
+      const uint8_t tag = frame[testutil::kFirstDataByte];  // answered: incremented
+      if (n != 0 && tag >= 0x51 && tag <= 0x71 && tag % 0x10 == 1) {
+        slices_at[(tag - 0x51) / 0x10].store(slices.load());
+      }
+      return n;
+    });
+    loop.set_after_frame_work([&] {
+      const int k = slices.fetch_add(1) + 1;
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+      return k < kSlices;
+    });
+    RawSocketLink master_link("lo");
+    testutil::wait_for_receive_timestamps();
+    for (uint8_t tag : {0x50, 0x60, 0x70}) {
+      auto frame = testutil::ethercat_frame(tag);
+      stamp(frame);
+      if (!master_link.send(frame)) return 1;
+    }
+    std::atomic<int> replies{0};
+    std::thread master([&] {
+      for (uint8_t tag : {0x50, 0x60, 0x70}) {
+        const auto got = testutil::receive_matching(master_link, [tag](std::span<const uint8_t> f) {
+          return ours(f) && (f[6] & 0x02) && f[testutil::kFirstDataByte] == tag + 1;
+        });
+        if (!got.empty()) replies.fetch_add(1);
+      }
+      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+      while (slices.load() < kSlices && std::chrono::steady_clock::now() < until) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+      loop.post([&] { loop.stop(); });
+    });
+    const int rc = loop.run();
+    master.join();
+    if (rc != 0 || replies.load() != 3) return 2;
+    for (const auto& at : slices_at) {
+      if (at.load() != 0) return 3;  // a reply of the burst came after some of the work
+    }
+    if (loop.burst_frames() != 2) return 4;
+    if (slices.load() < kSlices) return 5;  // the work ran, once, to the end
+    return 0;
+  });
 }
 
 // Under chrt -f the loop must not poll after a frame: a SCHED_FIFO thread that never sleeps

@@ -17,8 +17,10 @@
 #include <chrono>
 #include <cstring>
 #include <functional>
+#include <thread>
 #include <vector>
 
+#include "ecat/host/event_loop.hpp"
 #include "ecat/host/privileges.hpp"
 #include "ecat/host/raw_socket_link.hpp"
 #include "tests/ecat/link_test_util.hpp"
@@ -93,48 +95,14 @@ TEST(LinkSocket, SendsWholeFramesThatArriveUnchanged) {
   EXPECT_EQ(got, frame);
 }
 
-// Brings interface `name` up or down (SIOCSIFFLAGS); false when the kernel refused.
-bool set_up(const char* name, bool up) {
-  const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) return false;
-  ifreq ifr{};
-  std::strncpy(ifr.ifr_name, name, IFNAMSIZ - 1);
-  bool ok = ioctl(fd, SIOCGIFFLAGS, &ifr) == 0;
-  if (ok) {
-    ifr.ifr_flags = static_cast<short>(up ? (ifr.ifr_flags | IFF_UP) : (ifr.ifr_flags & ~IFF_UP));
-    ok = ioctl(fd, SIOCSIFFLAGS, &ifr) == 0;
-  }
-  close(fd);
-  return ok;
-}
-
-// Runs fn in a child process with a network namespace of its own, its loopback interface up
-// and quiet: no other test's frames. Returns fn's result; 90 when the namespace could not be
-// made (the test is then skipped).
-int in_own_network(const std::function<int()>& fn) {
-  return testutil::in_child([&fn] {
-    if (unshare(CLONE_NEWNET) != 0 || !set_up("lo", true)) return 90;
-    return fn();
-  });
-}
-
 // Events poll() reports on the link's socket right now.
 short poll_now(const RawSocketLink& link) {
   pollfd pfd{link.fd(), POLLIN, 0};
   return poll(&pfd, 1, 0) > 0 ? pfd.revents : 0;
 }
 
-// Runs a test body in a network namespace of its own (in_own_network) and reports its result;
-// skips where the process cannot open a raw socket or make the namespace.
-void expect_ok_in_own_network(const std::function<int()>& body) {
-  if (!testutil::can_open_raw_socket()) GTEST_SKIP() << "needs root or CAP_NET_RAW";
-  const int status = in_own_network(body);
-  if (status == 90) GTEST_SKIP() << "cannot make a network namespace";
-  EXPECT_EQ(status, 0);
-}
-
 TEST(LinkReceive, VlanTaggedFrameArrivesWithItsTagAtFullLength) {
-  expect_ok_in_own_network([] {
+  testutil::expect_ok_in_own_network([] {
     RawSocketLink link("lo");
     testutil::RawSender sender("lo");
     // The tag (TPID 0x8100, priority 5, VLAN 42) after the addresses, as on the wire; the
@@ -155,7 +123,7 @@ TEST(LinkReceive, VlanTaggedFrameArrivesWithItsTagAtFullLength) {
 
 TEST(LinkReceive, FramesArriveInOrderAndNoneIsLost) {
   // 400 frames in bursts of 40 (a master with frames in flight): none lost or reordered.
-  expect_ok_in_own_network([] {
+  testutil::expect_ok_in_own_network([] {
     RawSocketLink link("lo");
     testutil::RawSender sender("lo");
     int expected = 0;
@@ -181,7 +149,7 @@ TEST(LinkReceive, FramesArriveInOrderAndNoneIsLost) {
 TEST(LinkReceive, ATakenFrameLeavesTheSocketQuiet) {
   // The waiting loop sleeps in poll() once the pending frames are taken: a frame still counted
   // as pending would wake it at once, forever.
-  expect_ok_in_own_network([] {
+  testutil::expect_ok_in_own_network([] {
     RawSocketLink link("lo");
     testutil::RawSender sender("lo");
     if (!sender.send(testutil::ethercat_frame(0x66))) return 1;
@@ -195,16 +163,42 @@ TEST(LinkReceive, ATakenFrameLeavesTheSocketQuiet) {
   });
 }
 
-TEST(LinkReceive, InterfaceDownIsReportedOnceAndFramesFlowWhenItIsBack) {
-  expect_ok_in_own_network([] {
+// The event loop's burst test (event_loop.hpp): a frame that arrived before the bound is taken,
+// one that arrived after it stays queued for try_receive(), in order.
+TEST(LinkReceive, SentBeforeTakesOnlyFramesThatArrivedBeforeTheBound) {
+  testutil::expect_ok_in_own_network([] {
     RawSocketLink link("lo");
-    if (!set_up("lo", false)) return 1;
+    testutil::RawSender sender("lo");
+    testutil::wait_for_receive_timestamps();
+    if (!link.try_receive_sent_before(realtime_ns()).empty()) return 1;  // nothing pending
+    if (!sender.send(testutil::ethercat_frame(0x71))) return 2;
+    pollfd pfd{link.fd(), POLLIN, 0};
+    if (poll(&pfd, 1, 2000) != 1) return 3;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    const uint64_t bound = realtime_ns();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    if (!sender.send(testutil::ethercat_frame(0x72))) return 4;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    const auto first = link.try_receive_sent_before(bound);
+    if (first.empty() || first[testutil::kFirstDataByte] != 0x71) return 5;
+    if (!link.try_receive_sent_before(bound).empty()) return 6;  // 0x72 came after the bound
+    const auto second = link.try_receive();
+    if (second.empty() || second[testutil::kFirstDataByte] != 0x72) return 7;
+    if (link.frames_received() != 2) return 8;
+    return 0;
+  });
+}
+
+TEST(LinkReceive, InterfaceDownIsReportedOnceAndFramesFlowWhenItIsBack) {
+  testutil::expect_ok_in_own_network([] {
+    RawSocketLink link("lo");
+    if (!testutil::set_up("lo", false)) return 1;
     // ENETDOWN is pending: poll says so until a receive takes the error (the waiting loop
     // receives on POLLERR, so it does not spin on it), and then sleeps again.
     if ((poll_now(link) & POLLERR) == 0) return 2;
     if (!link.try_receive().empty()) return 3;
     if (poll_now(link) != 0) return 4;
-    if (!set_up("lo", true)) return 5;
+    if (!testutil::set_up("lo", true)) return 5;
     testutil::RawSender sender("lo");
     if (!sender.send(testutil::ethercat_frame(0x77))) return 6;
     const auto got = testutil::receive_matching(link, [](std::span<const uint8_t> f) {
