@@ -77,7 +77,7 @@ void Esc::power_on_reset() {
   fmmu_active_mask_ = 0;
   fmmu_meeting_known_ = 0;
   fmmu_whole_mask_ = 0;
-  whole_plan_.valid = false;
+  forget_whole_plans();
   if (fmmu_generation_ != nullptr) ++*fmmu_generation_;
 
   sii_reload_config_area();

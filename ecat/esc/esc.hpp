@@ -86,7 +86,7 @@ class Esc {
   // in turn.
   void prefetch() const {
     __builtin_prefetch(&pass_);
-    __builtin_prefetch(&whole_plan_);
+    __builtin_prefetch(&whole_plans_[last_plan_]);
     __builtin_prefetch(&sm_[0]);
     __builtin_prefetch(&mem_[reg::kEcatEventRequest]);
     __builtin_prefetch(&mem_[reg::kSm]);
@@ -102,7 +102,7 @@ class Esc {
   // no longer activated are skipped. The master's cyclic LRW - the datagram the kept plan was
   // made for, when that plan is an exchange - goes straight to it.
   void process_logical_datagram(uint8_t* datagram, uint16_t data_len, uint16_t fmmus) {
-    const WholePlan& p = whole_plan_;
+    const WholePlan& p = whole_plans_[last_plan_];
     if (p.exchange && p.valid && p.len == data_len &&
         p.fmmus == static_cast<uint16_t>(fmmus & fmmu_active_mask_) &&
         datagram[0] == static_cast<uint8_t>(Command::Lrw) && p.address == le::get32(datagram + 2)) {
@@ -408,9 +408,16 @@ class Esc {
     uint16_t input_offset = 0;
     uint16_t output_offset = 0;
   };
-  void plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus);
-  void plan_exchange(uint8_t usable);  // the exchange part of the plan, once the rest is made
-  int exchange_whole(uint8_t* data);   // the planned exchange for datagram data `data`; its WKC
+  void plan_whole_fmmus(WholePlan& p, uint8_t usable, uint32_t address, uint16_t len,
+                        uint16_t fmmus);
+  // The exchange part of plan p, once the rest is made.
+  void plan_exchange(WholePlan& p, uint8_t usable);
+  // The planned exchange of the last plan used, for datagram data `data`; its WKC.
+  int exchange_whole(uint8_t* data);
+  void forget_whole_plans() {
+    whole_plans_[0].valid = false;
+    whole_plans_[1].valid = false;
+  }
   // process_logical_datagram: the planned exchange for the whole datagram (working counter,
   // IRQ field; sync_manager.cpp), and every other logical datagram (fmmu.cpp).
   void exchange_datagram(uint8_t* datagram, uint16_t data_len);
@@ -540,7 +547,12 @@ class Esc {
   bool reset_signal_ = true;             // raised by every reset until take_reset()
   bool watchdog_armed_ = false;          // the process-data watchdog's deadline is set
   bool watchdog_running_ = true;         // 0x0440 bit 0: not expired
-  WholePlan whole_plan_{};
+  // Two plans: a master whose image takes two datagrams (inputs in one, outputs in the other,
+  // as ethercrab and SOEM cut an image larger than one frame) sends both to each ESC every
+  // cycle, and one kept plan would be made again for each. whole_plans_[last_plan_] is the one
+  // the last logical datagram used; a new plan replaces the other.
+  std::array<WholePlan, 2> whole_plans_{};
+  uint8_t last_plan_ = 0;
   std::array<uint16_t, kFmmus> fmmu_meeting_{};
   std::array<SmState, kSyncManagers> sm_{};
   std::array<FmmuState, kFmmus> fmmu_{};

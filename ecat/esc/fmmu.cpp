@@ -93,7 +93,7 @@ void Esc::reload_fmmu(int index) {
 void Esc::refresh_fmmu_meetings() {
   fmmu_meeting_known_ = 0;
   fmmu_whole_mask_ = 0;
-  whole_plan_.valid = false;
+  forget_whole_plans();
   for (int n = 0; n < kFmmus; ++n) {
     const FmmuState& f = fmmu_[n];
     if (!f.maps) continue;
@@ -200,8 +200,8 @@ const uint8_t* Esc::keep_incoming(const uint8_t* data, uint32_t first, uint32_t 
   return scratch_.data();
 }
 
-void Esc::plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint16_t fmmus) {
-  WholePlan& p = whole_plan_;
+void Esc::plan_whole_fmmus(WholePlan& p, uint8_t usable, uint32_t address, uint16_t len,
+                           uint16_t fmmus) {
   p = WholePlan{address, len, fmmus, usable, true};
   const uint64_t dg_end = static_cast<uint64_t>(address) + len;
   FmmuSide reads;
@@ -229,11 +229,10 @@ void Esc::plan_whole_fmmus(uint8_t usable, uint32_t address, uint16_t len, uint1
     p.incoming_end = static_cast<uint16_t>(writes.end);
     return;
   }
-  plan_exchange(usable);
+  plan_exchange(p, usable);
 }
 
-void Esc::plan_exchange(uint8_t usable) {
-  WholePlan& p = whole_plan_;
+void Esc::plan_exchange(WholePlan& p, uint8_t usable) {
   if (usable != 0x03 || !std::has_single_bit(p.reads) || !std::has_single_bit(p.writes)) return;
   const int r = std::countr_zero(p.reads);
   const int w = std::countr_zero(p.writes);
@@ -257,10 +256,17 @@ void Esc::plan_exchange(uint8_t usable) {
 
 int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* data,
                              uint16_t len, uint16_t fmmus) {
-  const WholePlan& p = whole_plan_;
-  if (!p.valid || p.address != address || p.len != len || p.fmmus != fmmus || p.usable != usable) {
-    plan_whole_fmmus(usable, address, len, fmmus);
+  const auto planned = [&](const WholePlan& p) {
+    return p.valid && p.address == address && p.len == len && p.fmmus == fmmus &&
+           p.usable == usable;
+  };
+  if (!planned(whole_plans_[last_plan_])) {
+    last_plan_ ^= 1;  // the other plan, or a new one in its place
+    if (!planned(whole_plans_[last_plan_])) {
+      plan_whole_fmmus(whole_plans_[last_plan_], usable, address, len, fmmus);
+    }
   }
+  const WholePlan& p = whole_plans_[last_plan_];
   if (!p.whole) return -1;
   if (p.exchange) return exchange_whole(data);
   if ((p.reads | p.writes) == 0) return 0;
@@ -282,7 +288,7 @@ int Esc::process_whole_fmmus(Command cmd, uint8_t usable, uint32_t address, uint
 }
 
 int Esc::exchange_whole(uint8_t* data) {
-  const WholePlan& p = whole_plan_;
+  const WholePlan& p = whole_plans_[last_plan_];
   const bool write = !write_protection_active() || write_allowed(reg::kProcessRam);  // ESC-wide
   return sm_exchange_buffers(p.input_sm, data + p.input_offset, p.output_sm, data + p.output_offset,
                              write, p.exchange_watchdog);

@@ -280,7 +280,7 @@ int Esc::sm_exchange_buffers(int input, uint8_t* dst, int output, const uint8_t*
 }
 
 void Esc::exchange_datagram(uint8_t* datagram, uint16_t data_len) {
-  const WholePlan& p = whole_plan_;
+  const WholePlan& p = whole_plans_[last_plan_];
   uint8_t* const data = datagram + kDatagramHeaderSize;
   const bool write = !write_protection_active() || write_allowed(reg::kProcessRam);  // ESC-wide
   const int wkc = sm_exchange_buffers(p.input_sm, data + p.input_offset, p.output_sm,

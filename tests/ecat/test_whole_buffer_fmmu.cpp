@@ -209,6 +209,31 @@ TEST_P(WholeBufferFmmu, ReconfiguredFmmuIsFollowed) {
   logical("LWR at the new place", Command::Lwr, 0x40, bytes(kOutLen, 9));
 }
 
+// An image in two datagrams (a master that cuts it where a frame ends: here the outputs in one
+// LRW, the inputs in the next), every cycle: the ESC keeps a plan for each. A third datagram
+// replaces one of them, and a reconfigured FMMU drops both.
+TEST_P(WholeBufferFmmu, ImageInTwoDatagramsEveryCycle) {
+  for (uint8_t cycle = 0; cycle < 4; ++cycle) {
+    logical("LRW of the outputs", Command::Lrw, kLogOut, bytes(kOutLen, cycle));
+    logical("LRW of the inputs", Command::Lrw, kLogIn, bytes(kInLen, 0x10 + cycle));
+    both("PDI turn", [cycle](Chip& c) {
+      std::vector<uint8_t> out(kOutLen);
+      c.esc.pdi_read_buffer(2, kOut, out.data(), kOutLen);
+      const auto in = bytes(kInLen, static_cast<uint8_t>(0x60 + cycle));
+      c.esc.pdi_write_buffer(3, kIn, in.data(), kInLen);
+    });
+    if (cycle == 1) logical("LRD of both, once", Command::Lrd, kLogOut, bytes(kOutLen + kInLen, 0));
+  }
+  both("outputs moved to logical 0x40", [](Chip& c) {
+    c.apwr(0x0600, {0x40});
+    if (c.split) c.apwr(0x0610, {0x40 + kOutLen / 2});
+  });
+  logical("LRW at the outputs' old place", Command::Lrw, kLogOut, bytes(kOutLen, 0x20));
+  logical("LRW of the inputs", Command::Lrw, kLogIn, bytes(kInLen, 0x21));
+  logical("LRW at the outputs' new place", Command::Lrw, 0x40, bytes(kOutLen, 0x22));
+  logical("LRW of the inputs again", Command::Lrw, kLogIn, bytes(kInLen, 0x23));
+}
+
 INSTANTIATE_TEST_SUITE_P(Datagram, WholeBufferFmmu, ::testing::Values(false, true),
                          [](const ::testing::TestParamInfo<bool>& info) {
                            return info.param ? "ThroughTheLogicalMap" : "AsProcessDatagram";
