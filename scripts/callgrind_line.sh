@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Instructions per slave of one cyclic frame through `rackcat run`'s line of tiny racks, whole
+# Instructions per slave of one master cycle (one LRW frame; 1,024 slaves: two) through `rackcat run`'s line of tiny racks, whole
 # stack (bench_rack_line: Segment::process of the master's LRW, then the firmware and
 # application round after_frame runs), counted by callgrind: the inclusive cost of
 # rack_line_cycle over its calls and the slaves. The in-process counterpart of op_bench's
@@ -47,7 +47,7 @@ for n in "$@"; do
         match($0, /\(([0-9,]+)x\)/)
         c = substr($0, RSTART + 1, RLENGTH - 3); gsub(/,/, "", c); calls += c; next }
       / \* .*rack_line_cycle/ && calls > 0 && !done {
-        printf "%d slaves: %.0f instructions per frame (%.0f per slave, %d frames)",
+        printf "%d slaves: %.0f instructions per cycle (%.0f per slave, %d cycles)",
                n, cost / calls, cost / calls / n, calls
         if (misses > 0) printf ", %.1f L1 data misses per slave", misses / calls / n
         printf "\n"; done = 1 }'

@@ -1,10 +1,10 @@
-// What one cyclic frame costs rackcat per slave, whole stack, in process: N tiny racks
+// What one master cycle costs rackcat per slave, whole stack, in process: N tiny racks
 // (examples/tiny-rack.yaml, built as `rackcat run --slaves N --config examples/tiny-rack.yaml`
 // builds them: apps::RackSlave behind an ecat::Segment on SteadyClock, firmware deferred as in
 // ecat::Runner), brought to OP by a test master the way op_bench's pysoem master configures
 // them (mailbox SyncManagers from the SII, SM2/SM3 and one FMMU each, outputs of all slaves
 // first, process-data watchdog off, SAFEOP, one cycle, OP). Each iteration is what the event
-// loop does for one frame: Segment::process of the master's LRW, then Segment::after_frame
+// loop does for one cycle: Segment::process of the master's LRW, then Segment::after_frame
 // (the firmware and application round the reply leaves behind, which the next frame waits for
 // when frames come back to back). Issue 16's per-slave cost on the wire, without the socket.
 //
@@ -12,7 +12,8 @@
 //   BM_RackLineCycleSteady/N/dc  the master repeats its outputs (op_bench's replay)
 // N = 16, 199 (pysoem's largest), 256 and 1,024 (ethercrab's, op_bench from 200 slaves on):
 // an image above 1,100 bytes goes in several frames of one LRW datagram each, as ethercrab
-// cuts it, each followed by its round (1,024: two frames per cycle).
+// cuts it (1,024: two frames per cycle), sent back to back as SOEM sends its frames: one round
+// after the last (the event loop's bursts, ecat/host/event_loop.hpp).
 // dc = 0: the LRW alone, the frame pysoem sends without config_dc (op_bench); dc = 1: with the
 // FRMW 0x0910 that SOEM adds to the frame once DC is configured (docs/INTEROP.md).
 // scripts/callgrind_line.sh counts their instructions per slave.
@@ -23,6 +24,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -193,13 +195,17 @@ class RackLine {
   uint16_t inputs_ = 0;
 };
 
-// One frame as the event loop handles it (not inlined: scripts/callgrind_line.sh counts its
-// instructions): the frame from the wire, processed in place (the reply), then the firmware
-// and application round of every slave it passed.
-[[gnu::noinline]] void rack_line_cycle(Segment& segment, const std::vector<uint8_t>& from_wire,
-                                       std::vector<uint8_t>& work) {
-  std::memcpy(work.data(), from_wire.data(), from_wire.size());
-  benchmark::DoNotOptimize(segment.process(work));
+// One master cycle as the event loop handles it (not inlined: scripts/callgrind_line.sh counts
+// its instructions): the cycle's frames from the wire, each processed in place (the replies),
+// then the firmware and application round of every slave they passed - once, as the loop runs
+// it after the last frame of a burst (a master sending a large image's frames back to back).
+[[gnu::noinline]] void rack_line_cycle(Segment& segment,
+                                       std::span<const std::vector<uint8_t>> from_wire,
+                                       std::span<std::vector<uint8_t>> work) {
+  for (size_t f = 0; f < from_wire.size(); ++f) {
+    std::memcpy(work[f].data(), from_wire[f].data(), from_wire[f].size());
+    benchmark::DoNotOptimize(segment.process(work[f]));
+  }
   segment.after_frame();
 }
 
@@ -216,10 +222,7 @@ void run(benchmark::State& state, bool changing) {
                                                        line.cycle(changing ? 0xA5 : 0x5A, dc)};
   std::vector<std::vector<uint8_t>> work = cycles[0];
   size_t k = 0;
-  for (auto _ : state) {
-    const auto& frames = cycles[k++ & 1];
-    for (size_t f = 0; f < frames.size(); ++f) rack_line_cycle(line.segment(), frames[f], work[f]);
-  }
+  for (auto _ : state) rack_line_cycle(line.segment(), cycles[k++ & 1], work);
   size_t wkc = 0;
   for (const auto& f : work) wkc += line.first_wkc(f);
   if (wkc != 3 * n) state.SkipWithError("unexpected LRW working counter");
@@ -248,8 +251,9 @@ void BM_RackLineLwrLrdSteady(benchmark::State& state) {
   const std::vector<std::vector<uint8_t>> frames = line.split_frames(0x5A);
   std::vector<std::vector<uint8_t>> work = frames;
   for (auto _ : state) {
-    rack_line_cycle(line.segment(), frames[0], work[0]);
-    rack_line_cycle(line.segment(), frames[1], work[1]);
+    // Each frame sent once the previous reply came: each followed by its round.
+    rack_line_cycle(line.segment(), {&frames[0], 1}, {&work[0], 1});
+    rack_line_cycle(line.segment(), {&frames[1], 1}, {&work[1], 1});
   }
   if (line.first_wkc(work[0]) != n || line.first_wkc(work[1]) != n) {
     state.SkipWithError("unexpected LWR/LRD working counter");
