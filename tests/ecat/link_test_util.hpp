@@ -16,6 +16,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstring>
+#include <ctime>
 #include <functional>
 #include <span>
 #include <thread>
@@ -93,10 +94,26 @@ class RawSender {
 
 // The kernel turns receive timestamps on for the whole system a moment after the first socket
 // asks for them (a deferred static key, net_enable_timestamp): a frame queued before that is
-// stamped only when it is read. Tests of RawSocketLink::try_receive_sent_before wait for it;
-// rackcat opens its link long before a master's first frame.
-inline void wait_for_receive_timestamps() {
-  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+// stamped only when it is read. Tests of RawSocketLink::try_receive_sent_before wait until a
+// probe frame (`send` puts it on the wire) comes with the time it arrived: taken as sent
+// before a bound read after it had arrived. False after 2 s. rackcat opens its link long
+// before a master's first frame.
+inline bool wait_for_receive_timestamps(RawSocketLink& link,
+                                        const std::function<bool(std::vector<uint8_t>)>& send) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  while (std::chrono::steady_clock::now() < until) {
+    if (!send(ethercat_frame(0xEE))) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    timespec now{};
+    clock_gettime(CLOCK_REALTIME, &now);
+    const uint64_t bound =
+        static_cast<uint64_t>(now.tv_sec) * 1'000'000'000ull + static_cast<uint64_t>(now.tv_nsec);
+    const bool stamped = !link.try_receive_sent_before(bound).empty();
+    while (!link.try_receive().empty()) {
+    }
+    if (stamped) return true;
+  }
+  return false;
 }
 
 // Brings interface `name` up or down (SIOCSIFFLAGS); false when the kernel refused.

@@ -308,7 +308,10 @@ TEST_P(LinkEventLoop, FramesOfABurstAreAnsweredBeforeTheWorkOfTheFirst) {
       return k < kSlices;
     });
     RawSocketLink master_link("lo");
-    testutil::wait_for_receive_timestamps();
+    if (!testutil::wait_for_receive_timestamps(
+            link, [&master_link](const std::vector<uint8_t>& f) { return master_link.send(f); })) {
+      return 9;
+    }
     for (uint8_t tag : {0x50, 0x60, 0x70}) {
       auto frame = testutil::ethercat_frame(tag);
       stamp(frame);
