@@ -127,8 +127,9 @@ void EventLoop::handle_frame(std::span<uint8_t> frame) {
   // passes while its firmware runs beside it - so they are answered now, and the one round
   // after the last covers them all (Segment::process). A frame sent once the master had the
   // reply (the next cycle, a mailbox poll) still finds every frame's work done.
-  for (auto next = link_.try_receive_sent_before(replied); !next.empty();
-       next = link_.try_receive_sent_before(replied)) {
+  // (No reply, no burst: the master saw nothing.)
+  for (auto next = replied != 0 ? link_.try_receive_sent_before(replied) : std::span<uint8_t>{};
+       !next.empty(); next = link_.try_receive_sent_before(replied)) {
     ++burst_frames_;
     (void)answer(next);
   }
