@@ -87,7 +87,18 @@ NS = wb.NS
 # SOEM's EC_MAXSLAVE: pysoem configures fewer slaves than this.
 PYSOEM_MAX = 200
 
-CONFIGURE = r"""
+# Both capture scripts end the same way: one cycle's frames, in order, each to a file of its own
+# (OUT, or OUT.0, OUT.1, ... for several), and one line for configure(): FILE[+FILE...], the
+# master's expected working counter, the one seen, the frames' bytes.
+WRITE_CYCLE = r"""
+def write_cycle(out, frames, expected, wkc):
+    files = [out] if len(frames) == 1 else [f"{out}.{k}" for k in range(len(frames))]
+    for path, frame in zip(files, frames):
+        open(path, "wb").write(frame)
+    print(f"{'+'.join(files)} {expected} {wkc} {sum(len(f) for f in frames)}")
+"""
+
+CONFIGURE = WRITE_CYCLE + r"""
 import socket, sys, time, pysoem
 iface, out, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
 m = pysoem.Master(); m.open(iface)
@@ -129,19 +140,15 @@ for _ in range(50):
     if frames and len(frames) == known: break
     known = len(frames)
 if not frames: sys.exit("no LRW/LRD/LWR frame captured")
-files = []
-for k, address in enumerate(sorted(frames)):
-    frame = frames[address]
+cycle = [frames[address] for address in sorted(frames)]
+for frame in cycle:
     pos, end = 16, 16 + (int.from_bytes(frame[14:16], "little") & 0x7FF)
     while pos + 12 <= end:  # datagrams: 10-byte header, data, 2-byte working counter
         n = int.from_bytes(frame[pos + 6:pos + 8], "little")
         frame[pos + 10 + (n & 0x7FF):pos + 12 + (n & 0x7FF)] = b"\0\0"
         if not n & 0x8000: break  # no more datagrams follow
         pos += 12 + (n & 0x7FF)
-    path = out if len(frames) == 1 else f"{out}.{k}"
-    open(path, "wb").write(frame)
-    files.append(path)
-print(f"{'+'.join(files)} {m.expected_wkc} {wkc} {sum(len(f) for f in frames.values())}")
+write_cycle(out, cycle, m.expected_wkc, wkc)
 """
 
 # From SOEM's EC_MAXSLAVE (200) on, ethercrab configures the line (interop/ethercrab, --mode
@@ -152,7 +159,7 @@ print(f"{'+'.join(files)} {m.expected_wkc} {wkc} {sum(len(f) for f in frames.val
 # frame with the source-MAC bit set, inputs filled in, working counters counted; ETG.1000.4
 # 5.1, 5.2); the replay keeps their LRW datagrams, one per frame, with the working counter set
 # back to 0: the master's cyclic LRW, in as many frames as its image needs.
-CONFIGURE_ETHERCRAB = r"""
+CONFIGURE_ETHERCRAB = WRITE_CYCLE + r"""
 import socket, subprocess, sys, time
 iface, out, n, binary = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 p = subprocess.Popen([binary, "--iface", iface, "--mode", "op", "--expect-slaves", str(n),
@@ -182,19 +189,17 @@ if p.wait() != 0:
     sys.exit("ethercrab --mode op failed:\n" + "".join(log[-20:]))
 op = [l.split() for l in log if l.startswith("op:")][0]
 image, expected = int(op[4]) + int(op[6]), int(op[10])
-files, covered, wkc, total = [], 0, 0, 0
-for k, address in enumerate(sorted(replies)):
+cycle, covered, wkc = [], 0, 0
+for address in sorted(replies):
     data, reply_wkc = replies[address]
     header = bytes(6 * [0xFF] + 6 * [0] + [0x88, 0xA4])  # the pinger puts its own source MAC
     ecat = (10 + len(data) + 2) | 0x1000  # length, type 1 (datagrams)
     dgram = bytes([0x0C, 0]) + address.to_bytes(4, "little") + len(data).to_bytes(2, "little")
-    frame = header + ecat.to_bytes(2, "little") + dgram + b"\0\0" + data + b"\0\0"
-    path = f"{out}.{k}"
-    open(path, "wb").write(frame)
-    files.append(path); covered += len(data); wkc += reply_wkc; total += len(frame)
+    cycle.append(header + ecat.to_bytes(2, "little") + dgram + b"\0\0" + data + b"\0\0")
+    covered += len(data); wkc += reply_wkc
 if covered != image:
     sys.exit(f"captured LRW datagrams cover {covered} of the {image}-byte image")
-print(f"{'+'.join(files)} {expected} {wkc} {total}")
+write_cycle(out, cycle, expected, wkc)
 """
 
 SDO = r"""

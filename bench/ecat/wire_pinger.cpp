@@ -142,7 +142,7 @@ int64_t round_trip(Socket& s, std::vector<Frame>& frames, uint8_t index, uint32_
     if (send(s.fd, frames[k].bytes.data(), frames[k].bytes.size(), 0) < 0) return -1;
   }
   uint32_t wkc = 0;
-  std::vector<bool> answered(frames.size(), false);
+  uint32_t answered = 0;  // bit k: frame k's reply came (at most kMaxFramesPerCycle frames)
   size_t pending = frames.size();
   while (pending > 0) {
     ssize_t n;
@@ -164,10 +164,11 @@ int64_t round_trip(Socket& s, std::vector<Frame>& frames, uint8_t index, uint32_
     // A reply: one of our frames with the ESC's source-MAC bit set and its datagram index.
     if (n < 18 || !(rx[6] & 0x02) || std::memcmp(rx + 7, s.mac + 1, 5) != 0) continue;
     const size_t k = static_cast<uint8_t>(rx[17] - index);
-    if (k >= frames.size() || answered[k] || n < static_cast<ssize_t>(frames[k].bytes.size())) {
+    if (k >= frames.size() || (answered & (1u << k)) != 0 ||
+        n < static_cast<ssize_t>(frames[k].bytes.size())) {
       continue;
     }
-    answered[k] = true;
+    answered |= 1u << k;
     --pending;
     wkc += get16(rx + frames[k].wkc_offset);
   }

@@ -16,12 +16,12 @@
 #include <chrono>
 #include <cstdint>
 #include <cstring>
-#include <ctime>
 #include <functional>
 #include <span>
 #include <thread>
 #include <vector>
 
+#include "ecat/host/event_loop.hpp"
 #include "ecat/host/raw_socket_link.hpp"
 
 namespace rackcat::ecat::testutil {
@@ -104,11 +104,7 @@ inline bool wait_for_receive_timestamps(RawSocketLink& link,
   while (std::chrono::steady_clock::now() < until) {
     if (!send(ethercat_frame(0xEE))) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    timespec now{};
-    clock_gettime(CLOCK_REALTIME, &now);
-    const uint64_t bound =
-        static_cast<uint64_t>(now.tv_sec) * 1'000'000'000ull + static_cast<uint64_t>(now.tv_nsec);
-    const bool stamped = !link.try_receive_sent_before(bound).empty();
+    const bool stamped = !link.try_receive_sent_before(realtime_ns()).empty();
     while (!link.try_receive().empty()) {
     }
     if (stamped) return true;
