@@ -121,7 +121,7 @@ void print_text(coe::ObjectDictionary& od) {
   std::printf("%-6s %-4s %-44s %-18s %5s %-11s %-5s %s\n", "index", "sub", "name", "type", "bits",
               "access", "pdo", "value");
   od.for_each([&](coe::Object& o) {
-    if (o.hooks.before_read) o.hooks.before_read(o, -1);
+    if (o.hooks().before_read) o.hooks().before_read(o, -1);
     if (o.code() != coe::ObjectCode::Var) {
       std::printf("0x%04X      %-44s %-18s %5zu\n", o.index(), o.name().c_str(),
                   std::string(code_name(o.code())).c_str(), o.bit_size());
@@ -139,7 +139,7 @@ void print_text(coe::ObjectDictionary& od) {
 void print_json(coe::ObjectDictionary& od) {
   nlohmann::json objects = nlohmann::json::array();
   od.for_each([&](coe::Object& o) {
-    if (o.hooks.before_read) o.hooks.before_read(o, -1);
+    if (o.hooks().before_read) o.hooks().before_read(o, -1);
     nlohmann::json entries = nlohmann::json::array();
     for (const auto& e : o.entries()) {
       entries.push_back({{"subindex", e.subindex},

@@ -61,8 +61,8 @@ AbortCode SdoServer::read_complete(Object& obj, uint8_t subindex, EsmState state
   if (subindex > 1) {
     return AbortCode::UnsupportedAccess;
   }
-  if (obj.hooks.before_read) {
-    obj.hooks.before_read(obj, -1);
+  if (obj.hooks().before_read) {
+    obj.hooks().before_read(obj, -1);
   }
   const uint8_t last = ca_last_subindex(obj);
   for (const Entry& e : obj.entries()) {
@@ -144,15 +144,15 @@ AbortCode SdoServer::write_complete(Object& obj, uint8_t subindex, std::span<con
       return rc;
     }
   }
-  if (obj.hooks.validate_write) {
-    if (AbortCode rc = obj.hooks.validate_write(obj, -1, {cand, image.size()}, state);
+  if (obj.hooks().validate_write) {
+    if (AbortCode rc = obj.hooks().validate_write(obj, -1, {cand, image.size()}, state);
         rc != AbortCode::None) {
       return rc;
     }
   }
   std::memcpy(image.data(), cand, image.size());
-  if (obj.hooks.after_write) {
-    obj.hooks.after_write(obj, -1);
+  if (obj.hooks().after_write) {
+    obj.hooks().after_write(obj, -1);
   }
   return AbortCode::None;
 }

@@ -142,9 +142,10 @@ Object History::make_object(uint16_t default_flags) const {
 void History::bind(Object& object) {
   object_ = &object;
   flags_ = static_cast<uint16_t>(object.get_u(5) & kFlagsWritable);
-  object.hooks.before_read = [this](Object&, int subindex) { on_read(subindex); };
-  object.hooks.validate_write = [this](const Object& obj, int subindex,
-                                       std::span<const uint8_t> data, EsmState) -> AbortCode {
+  object.edit_hooks().before_read = [this](Object&, int subindex) { on_read(subindex); };
+  object.edit_hooks().validate_write = [this](const Object& obj, int subindex,
+                                              std::span<const uint8_t> data,
+                                              EsmState) -> AbortCode {
     auto at = [&](uint8_t sub) -> std::span<const uint8_t> {
       if (subindex != -1) return data;
       const Entry* e = obj.entry(sub);
@@ -164,7 +165,7 @@ void History::bind(Object& object) {
     }
     return AbortCode::None;
   };
-  object.hooks.after_write = [this](Object& obj, int subindex) {
+  object.edit_hooks().after_write = [this](Object& obj, int subindex) {
     // The committed bytes are the request; execute it, then publish the real state.
     const auto ack = static_cast<uint8_t>(obj.get_u(3));
     const auto fl = static_cast<uint16_t>(obj.get_u(5));

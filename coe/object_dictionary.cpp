@@ -21,6 +21,29 @@ Object::Object(uint16_t index, ObjectCode code, std::string name, uint16_t data_
   desc_ = std::move(desc);
 }
 
+const ObjectHooks Object::kNoHooks{};
+
+Object::Object(const Object& other)
+    : index_(other.index_),
+      shared_(other.shared_),
+      entries_shared_(other.entries_shared_),
+      image_(other.image_),
+      desc_(other.desc_),
+      hooks_(other.hooks_ ? std::make_unique<ObjectHooks>(*other.hooks_) : nullptr) {}
+
+Object& Object::operator=(const Object& other) {
+  if (this != &other) {
+    Object copy(other);
+    *this = std::move(copy);
+  }
+  return *this;
+}
+
+ObjectHooks& Object::edit_hooks() {
+  if (!hooks_) hooks_ = std::make_unique<ObjectHooks>();
+  return *hooks_;
+}
+
 ObjectDescription& Object::writable_description() {
   if (shared_ || desc_.use_count() > 1) {
     desc_ = std::make_shared<ObjectDescription>(*desc_);

@@ -99,7 +99,8 @@ struct ObjectDescription {
 };
 
 // Live values and command objects. All hooks are optional; a hook runs on the request path and
-// must not allocate.
+// must not allocate. Most objects of a device have none, so an object holds its hooks out of
+// line, allocated when the first one is set (Object::edit_hooks).
 struct ObjectHooks {
   // The subindex the process image passes to before_read/after_write of a mapped object on the
   // cyclic path (every cycle, all mapped entries at once): refresh or consume only what can be
@@ -123,6 +124,11 @@ struct ObjectHooks {
 class Object {
  public:
   Object(uint16_t index, ObjectCode code, std::string name, uint16_t data_type = 0);
+  Object(const Object& other);
+  Object& operator=(const Object& other);
+  Object(Object&&) noexcept = default;
+  Object& operator=(Object&&) noexcept = default;
+  ~Object() = default;
 
   uint16_t index() const { return index_; }
   ObjectCode code() const { return desc_->code; }
@@ -182,9 +188,14 @@ class Object {
   // values a device reset may change (a new firmware's version, the enumerated modules).
   bool set_default(uint8_t subindex, std::span<const uint8_t> value);
 
-  ObjectHooks hooks;
+  // The hooks the request and cyclic paths call (all empty when none was set).
+  const ObjectHooks& hooks() const { return hooks_ ? *hooks_ : kNoHooks; }
+  // The hooks to set or replace, at start-up: allocates them on the first call.
+  ObjectHooks& edit_hooks();
 
  private:
+  static const ObjectHooks kNoHooks;
+
   // The description, copied first when it is shared (copy-on-write).
   ObjectDescription& writable_description();
   std::vector<Entry>& writable_entries();
@@ -194,6 +205,7 @@ class Object {
   bool entries_shared_ = false;  // desc_->entries is interned: never changed in place
   ObjectImage image_;
   std::shared_ptr<const ObjectDescription> desc_;
+  std::unique_ptr<ObjectHooks> hooks_;  // null: no hooks (most objects)
 };
 
 class ObjectDictionary {

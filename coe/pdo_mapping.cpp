@@ -149,12 +149,14 @@ void install_pdo_validators(ObjectDictionary& od, size_t max_output_bytes, size_
     const uint16_t i = obj.index();
     if (i == kRxPdoAssign || i == kTxPdoAssign) {
       const PdoDirection dir = direction_of(i);
-      obj.hooks.validate_write = pdo_assign_validator(
+      obj.edit_hooks().validate_write = pdo_assign_validator(
           od, dir, dir == PdoDirection::Rx ? max_output_bytes : max_input_bytes);
     } else if (is_mapping_index(i, PdoDirection::Rx)) {
-      obj.hooks.validate_write = pdo_mapping_validator(od, PdoDirection::Rx, max_output_bytes);
+      obj.edit_hooks().validate_write =
+          pdo_mapping_validator(od, PdoDirection::Rx, max_output_bytes);
     } else if (is_mapping_index(i, PdoDirection::Tx)) {
-      obj.hooks.validate_write = pdo_mapping_validator(od, PdoDirection::Tx, max_input_bytes);
+      obj.edit_hooks().validate_write =
+          pdo_mapping_validator(od, PdoDirection::Tx, max_input_bytes);
     }
   });
 }

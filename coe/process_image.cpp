@@ -79,8 +79,8 @@ AbortCode ProcessImage::compile_direction(PdoDirection dir, Direction& out) {
         }
         out.copies.push_back(
             Copy{image, target->bit_offset, static_cast<uint32_t>(out.bits), m.bits});
-        const bool hooked = dir == PdoDirection::Rx ? static_cast<bool>(obj->hooks.after_write)
-                                                    : static_cast<bool>(obj->hooks.before_read);
+        const bool hooked = dir == PdoDirection::Rx ? static_cast<bool>(obj->hooks().after_write)
+                                                    : static_cast<bool>(obj->hooks().before_read);
         if (hooked && std::find(out.hooked.begin(), out.hooked.end(), obj) == out.hooked.end()) {
           out.hooked.push_back(obj);
         }
@@ -123,13 +123,13 @@ void ProcessImage::write_outputs(std::span<const uint8_t> sm2) {
     copy_entry(c.image, c.image_bit, sm2.data(), c.pd_bit, c.bits);
   }
   for (Object* obj : output_hooks_) {
-    obj->hooks.after_write(*obj, ObjectHooks::kProcessData);
+    obj->hooks().after_write(*obj, ObjectHooks::kProcessData);
   }
 }
 
 void ProcessImage::read_inputs(std::span<uint8_t> sm3) {
   for (Object* obj : input_hooks_) {
-    obj->hooks.before_read(*obj, ObjectHooks::kProcessData);
+    obj->hooks().before_read(*obj, ObjectHooks::kProcessData);
   }
   zero_bytes(sm3.data(), std::min(sm3.size(), input_bytes()));
   const size_t avail = sm3.size() * 8;

@@ -80,14 +80,14 @@ AbortCode SdoServer::write_entry(Object& obj, const Entry& e, std::span<const ui
     return rc;
   }
   const int subindex = e.subindex;
-  if (obj.hooks.validate_write) {
-    if (AbortCode rc = obj.hooks.validate_write(obj, subindex, v, state); rc != AbortCode::None) {
+  if (obj.hooks().validate_write) {
+    if (AbortCode rc = obj.hooks().validate_write(obj, subindex, v, state); rc != AbortCode::None) {
       return rc;
     }
   }
   copy_bits(obj.image().data(), e.bit_offset, value, 0, e.bit_length);
-  if (obj.hooks.after_write) {
-    obj.hooks.after_write(obj, subindex);
+  if (obj.hooks().after_write) {
+    obj.hooks().after_write(obj, subindex);
   }
   return AbortCode::None;
 }

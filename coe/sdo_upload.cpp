@@ -35,8 +35,8 @@ size_t SdoServer::upload_initiate(std::span<const uint8_t> body, std::span<uint8
     if (AbortCode rc = check_read_access(entry->access, state); rc != AbortCode::None) {
       return abort(reply, index, subindex, rc);
     }
-    if (obj->hooks.before_read) {
-      obj->hooks.before_read(*obj, subindex);
+    if (obj->hooks().before_read) {
+      obj->hooks().before_read(*obj, subindex);
     }
     n = entry->byte_length();
     if (n >= 1 && n <= 4) {

@@ -58,7 +58,7 @@ void add_cdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
 
 void attach_cdp_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device) {
   // 0xF9F6 Time since power on, in seconds.
-  od.find(0xF9F6)->hooks.before_read = [&device](Object& obj, int) {
+  od.find(0xF9F6)->edit_hooks().before_read = [&device](Object& obj, int) {
     obj.set_u(0,
               static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::seconds>(
                                         std::chrono::steady_clock::now() - device.power_on_time())

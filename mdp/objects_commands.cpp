@@ -32,8 +32,8 @@ Object command(uint16_t index, const char* name, uint16_t command_bytes,
   o.add(num(2, "Status", DataType::Unsigned8, acc("ro"), 0));
   o.add(octets(3, "Response", response_bytes, acc("ro")));
   o.finalize();
-  o.hooks.validate_write = [check](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                   EsmState) {
+  o.edit_hooks().validate_write = [check](const Object& obj, int subindex,
+                                          std::span<const uint8_t> data, EsmState) {
     const auto cmd = written_bytes(obj, 1, subindex, data);
     if (cmd.empty()) return AbortCode::None;
     if (subindex == -1 && std::equal(cmd.begin(), cmd.end(), obj.bytes(1).begin())) {
@@ -130,10 +130,10 @@ void command_hooks(coe::ObjectDictionary& od, uint16_t index,
                    std::function<uint8_t(std::span<const uint8_t>)> execute,
                    std::function<void(Object&, PendingCommand&)> apply) {
   Object* o = od.find(index);
-  auto check = o->hooks.validate_write;
-  o->hooks.validate_write = [check, pending, execute = std::move(execute)](
-                                const Object& obj, int subindex, std::span<const uint8_t> data,
-                                EsmState s) {
+  auto check = o->hooks().validate_write;
+  o->edit_hooks().validate_write = [check, pending, execute = std::move(execute)](
+                                       const Object& obj, int subindex,
+                                       std::span<const uint8_t> data, EsmState s) {
     if (AbortCode rc = check(obj, subindex, data, s); rc != AbortCode::None) return rc;
     *pending = PendingCommand{};
     const auto cmd_bytes =
@@ -151,7 +151,7 @@ void command_hooks(coe::ObjectDictionary& od, uint16_t index,
     pending->status = execute(cmd_bytes);
     return AbortCode::None;
   };
-  o->hooks.after_write = [pending, apply = std::move(apply)](Object& obj, int) {
+  o->edit_hooks().after_write = [pending, apply = std::move(apply)](Object& obj, int) {
     if (pending->executed) apply(obj, *pending);
     pending->executed = false;
   };
@@ -208,7 +208,9 @@ void attach_command_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device) 
       finish);
   // Reading a command whose job runs shows its status once the worker has finished.
   for (uint16_t index : {0xFBF0, 0xFBF2, 0xFBF3, 0xFBF4}) {
-    od.find(index)->hooks.before_read = [&device](Object&, int) { device.complete_commands(); };
+    od.find(index)->edit_hooks().before_read = [&device](Object&, int) {
+      device.complete_commands();
+    };
   }
 }
 

@@ -79,9 +79,9 @@ Object user_pdo(coe::ObjectDictionary& od, bool rx) {
   }
   o.finalize();
   auto checks = coe::pdo_mapping_validator(od, dir, sm::kMaxProcessDataBytes);
-  o.hooks.validate_write = [checks, &od, index, dir](const Object& obj, int subindex,
-                                                     std::span<const uint8_t> data,
-                                                     EsmState state) {
+  o.edit_hooks().validate_write = [checks, &od, index, dir](const Object& obj, int subindex,
+                                                            std::span<const uint8_t> data,
+                                                            EsmState state) {
     if (AbortCode rc = checks(obj, subindex, data, state); rc != AbortCode::None) return rc;
     // Only subindex 0 (or a complete write) brings entries into use.
     if (subindex >= 1) return AbortCode::None;
@@ -145,8 +145,8 @@ Object assignment_object(const RackConfig& cfg, coe::ObjectDictionary& od, bool 
   o.finalize();
   auto checks = coe::pdo_assign_validator(od, rx ? coe::PdoDirection::Rx : coe::PdoDirection::Tx,
                                           sm::kMaxProcessDataBytes);
-  o.hooks.validate_write = [checks](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                    EsmState state) {
+  o.edit_hooks().validate_write = [checks](const Object& obj, int subindex,
+                                           std::span<const uint8_t> data, EsmState state) {
     if (AbortCode rc = checks(obj, subindex, data, state); rc != AbortCode::None) return rc;
     const Assignment a = candidate(obj, subindex, data);
     for (uint8_t i = 0; i < a.count; ++i) {
@@ -182,8 +182,8 @@ Object sync_parameter_object(bool outputs) {
   o.add(num(0x0C, "Cycle Time Too Small", DataType::Unsigned16, acc("ro"), 0));
   o.add(num(0x20, "Sync Error", DataType::Boolean, acc("ro"), 0));
   o.finalize();
-  o.hooks.validate_write = [outputs](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                     EsmState) {
+  o.edit_hooks().validate_write = [outputs](const Object& obj, int subindex,
+                                            std::span<const uint8_t> data, EsmState) {
     const auto v = written_bytes(obj, 0x01, subindex, data);
     if (v.size() < 2) return AbortCode::None;
     const uint16_t t = le::get16(v.data());
@@ -269,20 +269,20 @@ void attach_communication_behaviour(coe::ObjectDictionary& od, DeviceRuntime& de
   // The user PDOs likewise: a new mapping of an assigned PDO changes the SM2/SM3 sizes the ESM
   // checks on PREOP->SAFEOP.
   for (uint16_t index : {uint16_t{0x1C12}, uint16_t{0x1C13}, sm::kUserRxPdo, sm::kUserTxPdo}) {
-    od.find(index)->hooks.after_write = [&device](Object&, int) {
+    od.find(index)->edit_hooks().after_write = [&device](Object&, int) {
       device.recompile_process_image();
     };
   }
   // 0x1C32/0x1C33: counters from the cyclic path; Get Cycle Time = 2 resets them.
   for (const bool outputs : {true, false}) {
     Object* o = od.find(outputs ? 0x1C32 : 0x1C33);
-    o->hooks.before_read = [&device, outputs](Object& obj, int) {
+    o->edit_hooks().before_read = [&device, outputs](Object& obj, int) {
       const SyncStatistics& s = device.sync_statistics(outputs);
       obj.set_u(0x0B, s.sm_event_missed);
       obj.set_u(0x0C, s.cycle_time_too_small);
       obj.set_u(0x20, s.sync_error ? 1 : 0);
     };
-    o->hooks.after_write = [&device, outputs](Object& obj, int subindex) {
+    o->edit_hooks().after_write = [&device, outputs](Object& obj, int subindex) {
       if ((subindex == 0x08 || subindex == -1) && obj.get_u(0x08) == 2) {
         device.sync_statistics(outputs) = SyncStatistics{};
       }

@@ -57,8 +57,8 @@ Object device_information(const RackConfig& cfg) {
   o.add(with_unit(real(0x0F, "Temperature (CPU Zone)", acc("ro") | kTx, kInitialCpuTemperature),
                   coe::unit::kCelsius));
   o.finalize();
-  o.hooks.validate_write = [](const Object& obj, int subindex, std::span<const uint8_t> data,
-                              EsmState) {
+  o.edit_hooks().validate_write = [](const Object& obj, int subindex, std::span<const uint8_t> data,
+                                     EsmState) {
     // Only a changed value is checked: a complete access writes back what it read.
     auto changed = [&](uint8_t sub) {
       auto v = written_bytes(obj, sub, subindex, data);
@@ -147,7 +147,7 @@ void attach_device_info_behaviour(coe::ObjectDictionary& od, DeviceRuntime& devi
   // 0x2000:08 Clock: the system clock plus the offset last written (not kept over a reset).
   Object* o = od.find(0x2000);
   if (o == nullptr) return;
-  o->hooks.before_read = [&device](Object& obj, int subindex) {
+  o->edit_hooks().before_read = [&device](Object& obj, int subindex) {
     if (subindex != 0x08 && subindex != -1) return;
     const std::time_t t = std::time(nullptr) + device.clock_offset_s();
     std::tm tm{};
@@ -157,7 +157,7 @@ void attach_device_info_behaviour(coe::ObjectDictionary& od, DeviceRuntime& devi
                   tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec);
     obj.set_string(0x08, buf);
   };
-  o->hooks.after_write = [&device](Object& obj, int subindex) {
+  o->edit_hooks().after_write = [&device](Object& obj, int subindex) {
     if (subindex != 0x08 && subindex != -1) return;
     const std::string text = obj.get_string(0x08);
     if (is_valid_clock(text)) device.set_clock_offset_s(parse_clock(text) - std::time(nullptr));

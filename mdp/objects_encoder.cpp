@@ -35,8 +35,8 @@ Object settings_object(const Module& m, const enc::Hardware& hw) {
   o.add(num(enc::kVelocityFilter, "Velocity filter", DataType::Unsigned8, rw, d.velocity_filter));
   o.add(num(enc::kPresetValue, "Preset value", DataType::Integer32, rw, 0));
   o.finalize();
-  o.hooks.validate_write = [hw](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                EsmState) {
+  o.edit_hooks().validate_write = [hw](const Object& obj, int subindex,
+                                       std::span<const uint8_t> data, EsmState) {
     // 0/1 switches (guide 3.11.1-3.11.4): any other value is out of the entry's range.
     for (uint8_t sub : {enc::kCodeSequence, enc::kClass4, enc::kPresetControl, enc::kScaling}) {
       const auto b = written_bytes(obj, sub, subindex, data);

@@ -71,8 +71,8 @@ void add_mdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
   detect.add(octets(1, "Command", 4, acc("ro,wr_preop")));
   detect.add(num(2, "Status", DataType::Unsigned8, acc("ro"), 0));
   detect.finalize();
-  detect.hooks.validate_write = [](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                   EsmState) {
+  detect.edit_hooks().validate_write = [](const Object& obj, int subindex,
+                                          std::span<const uint8_t> data, EsmState) {
     const auto cmd = written_bytes(obj, 1, subindex, data);
     if (cmd.empty()) return AbortCode::None;
     if (subindex == -1 && std::equal(cmd.begin(), cmd.end(), obj.bytes(1).begin())) {
@@ -98,8 +98,8 @@ void add_mdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
   Object configured =
       ident_list(cfg, 0xF030, "Configured Module Ident List", 255, acc("ro,wr_preop"));
   const coe::ObjectDictionary* dict = &od;
-  configured.hooks.validate_write = [dict](const Object& obj, int subindex,
-                                           std::span<const uint8_t> data, EsmState) {
+  configured.edit_hooks().validate_write = [dict](const Object& obj, int subindex,
+                                                  std::span<const uint8_t> data, EsmState) {
     std::array<uint8_t, 2 + 4 * 255> cand{};
     const auto cur = obj.image();
     std::memcpy(cand.data(), cur.data(), std::min(cur.size(), cand.size()));
@@ -123,7 +123,7 @@ void add_mdp_objects(const RackConfig& cfg, coe::ObjectDictionary& od) {
 void attach_mdp_behaviour(coe::ObjectDictionary& od, DeviceRuntime& device) {
   // 0xF002 Detect Modules: the detected list becomes the configured rack, then drivers remove
   // what is offline (modules/, Detect Modules Override).
-  od.find(0xF002)->hooks.after_write = [&device](Object& obj, int) {
+  od.find(0xF002)->edit_hooks().after_write = [&device](Object& obj, int) {
     const auto c = obj.bytes(1);
     if (!std::equal(c.begin(), c.end(), cmd::kScan.begin(), cmd::kScan.end())) return;
     // Every configured module; the rack then narrows it to what it detects (guide Table 23).

@@ -28,8 +28,8 @@ Object reaction_array(uint16_t index, const char* name, uint8_t channels, bool (
               substitute::kGuide));
   }
   o.finalize();
-  o.hooks.validate_write = [valid](const Object& obj, int subindex, std::span<const uint8_t> data,
-                                   EsmState) {
+  o.edit_hooks().validate_write = [valid](const Object& obj, int subindex,
+                                          std::span<const uint8_t> data, EsmState) {
     if (subindex == 0) return AbortCode::None;  // sub 0 is read-only; the SDO server says so
     if (subindex > 0) {
       return data.size() >= 2 && valid(le::get16(data.data())) ? AbortCode::None

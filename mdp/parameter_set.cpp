@@ -166,8 +166,8 @@ std::string ParameterSet::check(std::span<const uint8_t> payload) const {
       }
     });
     if (!refused.empty()) return refused;
-    if (obj.hooks.validate_write) {
-      if (const auto rc = obj.hooks.validate_write(obj, -1, candidate, EsmState::PreOp);
+    if (obj.hooks().validate_write) {
+      if (const auto rc = obj.hooks().validate_write(obj, -1, candidate, EsmState::PreOp);
           rc != coe::AbortCode::None) {
         return fmt::format("0x{:04X} refused as an SDO write would be (abort 0x{:08X})",
                            obj.index(), static_cast<uint32_t>(rc));

@@ -3,6 +3,7 @@
 #include "ecat/esc/esc.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 
 #include "base/little_endian.hpp"
@@ -211,12 +212,19 @@ uint8_t Esc::process_physical(uint8_t command, uint16_t address, uint8_t* data, 
   }
 }
 
+uint8_t* Esc::datagram_scratch() {
+  alignas(base::kCacheLine) static thread_local std::array<uint8_t, kDatagramScratch> scratch{};
+  return scratch.data();
+}
+
 uint8_t Esc::physical_read_write(uint16_t address, uint8_t* data, uint16_t len, bool merge_or) {
   // The datagram returns the old content (ORed for BRW) while the incoming data is written;
   // WKC +1 for the read, +2 for the write (ETG.1000.4 §5.4.4).
-  std::memcpy(scratch_.data(), data, len);
+  if (len > kDatagramScratch) return 0;  // longer than any frame carries
+  uint8_t* const incoming = datagram_scratch();
+  std::memcpy(incoming, data, len);
   const bool r = physical_read(address, data, len, merge_or);
-  const bool w = physical_write(address, scratch_.data(), len);
+  const bool w = physical_write(address, incoming, len);
   return static_cast<uint8_t>((r ? 1 : 0) + (w ? 2 : 0));
 }
 

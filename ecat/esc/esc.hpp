@@ -374,9 +374,15 @@ class Esc {
     }
     bool meets(const FmmuSide& other) const { return first < other.end && other.first < end; }
   };
-  // Copies the incoming bytes [first, end) the writes take aside (scratch_, at the same
-  // offsets) and returns where the writes find them.
+  // Copies the incoming bytes [first, end) the writes take aside (datagram_scratch(), at the
+  // same offsets) and returns where the writes find them.
   const uint8_t* keep_incoming(const uint8_t* data, uint32_t first, uint32_t end);
+  // Where RW commands and meeting FMMUs keep a datagram's incoming bytes while the old memory
+  // is read into it: one buffer per thread, not per ESC (2 KiB each), since an ESC needs it
+  // only while it serves one datagram and a segment's ESCs serve it one after the other.
+  // Holds any datagram of a frame (ETG.1000.4 §5.4: at most 1,486 data bytes).
+  static constexpr size_t kDatagramScratch = 2048;
+  static uint8_t* datagram_scratch();
   // What process_whole_fmmus works out for a datagram from the FMMU configuration alone, kept
   // for the last one (the cyclic frame repeats it) until an FMMU or SM is (re)loaded: with each
   // FMMU's place in the datagram, so serving it reads no FMMU state. A datagram's bytes fit
@@ -573,9 +579,6 @@ class Esc {
   uint64_t next_sync0_ = 0;  // system time
   uint64_t next_sync1_ = 0;  // system time
   uint64_t sync0_count_ = 0;
-
-  // RW commands keep the incoming data here while the old memory is read into the datagram.
-  std::array<uint8_t, 2048> scratch_{};
 };
 
 }  // namespace rackcat::ecat

@@ -196,8 +196,9 @@ uint8_t Esc::walk_fmmus(Command cmd, uint8_t usable, uint32_t address, uint8_t* 
 }
 
 const uint8_t* Esc::keep_incoming(const uint8_t* data, uint32_t first, uint32_t end) {
-  std::memcpy(scratch_.data() + first, data + first, end - first);
-  return scratch_.data();
+  uint8_t* const incoming = datagram_scratch();
+  std::memcpy(incoming + first, data + first, end - first);
+  return incoming;
 }
 
 void Esc::plan_whole_fmmus(WholePlan& p, uint8_t usable, uint32_t address, uint16_t len,

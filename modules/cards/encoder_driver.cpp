@@ -61,9 +61,10 @@ EncoderDriver::EncoderDriver(const mdp::Module& m, coe::ObjectDictionary& od)
 
 void EncoderDriver::attach(mdp::Device& device) {
   device_ = &device;
-  auto inner = settings_->hooks.validate_write;
-  settings_->hooks.validate_write = [this, inner](const coe::Object& obj, int subindex,
-                                                  std::span<const uint8_t> data, EsmState state) {
+  auto inner = settings_->hooks().validate_write;
+  settings_->edit_hooks().validate_write = [this, inner](const coe::Object& obj, int subindex,
+                                                         std::span<const uint8_t> data,
+                                                         EsmState state) {
     const coe::AbortCode rc = inner ? inner(obj, subindex, data, state) : coe::AbortCode::None;
     if (rc != coe::AbortCode::None) {
       report(text::kEncoderParameter, static_cast<uint16_t>(subindex > 0 ? subindex : 0));
@@ -71,14 +72,14 @@ void EncoderDriver::attach(mdp::Device& device) {
     return rc;
   };
   // Guide 3.11.7: "Class 4 functionality must be enabled!" for a preset.
-  preset_->hooks.validate_write = [this](const coe::Object&, int subindex,
-                                         std::span<const uint8_t> data, EsmState) {
+  preset_->edit_hooks().validate_write = [this](const coe::Object&, int subindex,
+                                                std::span<const uint8_t> data, EsmState) {
     if (subindex != enc::kPresetCommand || data.empty() || data[0] == 0) {
       return coe::AbortCode::None;
     }
     return settings().class4 ? coe::AbortCode::None : coe::AbortCode::ParameterIncompatible;
   };
-  preset_->hooks.after_write = [this](coe::Object& o, int subindex) {
+  preset_->edit_hooks().after_write = [this](coe::Object& o, int subindex) {
     if (subindex != enc::kPresetCommand && subindex != -1) return;
     const auto cmd = static_cast<uint8_t>(o.get_u(enc::kPresetCommand));
     if (cmd == 0) return;

@@ -82,7 +82,7 @@ UartDriver::UartDriver(const mdp::Module& m, coe::ObjectDictionary& od)
 
 UartDriver::~UartDriver() {
   stop_ptys();
-  for (auto& [object, hooks] : saved_hooks_) object->hooks = std::move(hooks);
+  for (auto& [object, hooks] : saved_hooks_) object->edit_hooks() = std::move(hooks);
 }
 
 void UartDriver::read_config() {
@@ -130,31 +130,31 @@ void UartDriver::install_hooks() {
   // destructor, so no hook calls into a destroyed driver.
   for (coe::Object* o : {config_, info_, tx_obj_[0], tx_obj_[1], tx_obj_[2], tx_obj_[3], rx_obj_[0],
                          rx_obj_[1], rx_obj_[2], rx_obj_[3]}) {
-    if (o != nullptr) saved_hooks_.emplace_back(o, o->hooks);
+    if (o != nullptr) saved_hooks_.emplace_back(o, o->hooks());
   }
   if (config_ != nullptr) {
-    auto previous = config_->hooks.after_write;
-    config_->hooks.after_write = [this, previous](coe::Object& o, int sub) {
+    auto previous = config_->hooks().after_write;
+    config_->edit_hooks().after_write = [this, previous](coe::Object& o, int sub) {
       if (previous) previous(o, sub);
       read_config();
     };
   }
   if (info_ != nullptr) {
-    auto prev_write = info_->hooks.after_write;
-    info_->hooks.after_write = [this, prev_write](coe::Object& o, int sub) {
+    auto prev_write = info_->hooks().after_write;
+    info_->edit_hooks().after_write = [this, prev_write](coe::Object& o, int sub) {
       if (prev_write) prev_write(o, sub);
       on_control_written(sub);
     };
-    auto prev_read = info_->hooks.before_read;
-    info_->hooks.before_read = [this, prev_read](coe::Object& o, int sub) {
+    auto prev_read = info_->hooks().before_read;
+    info_->edit_hooks().before_read = [this, prev_read](coe::Object& o, int sub) {
       if (prev_read) prev_read(o, sub);
       refresh_status_objects();
     };
   }
   for (size_t c = 0; c < 4; ++c) {
     if (coe::Object* tx = tx_obj_[c]) {
-      auto previous = tx->hooks.after_write;
-      tx->hooks.after_write = [this, previous, c](coe::Object& o, int sub) {
+      auto previous = tx->hooks().after_write;
+      tx->edit_hooks().after_write = [this, previous, c](coe::Object& o, int sub) {
         if (previous) previous(o, sub);
         uint8_t bytes[255];
         size_t n = 0;
@@ -169,8 +169,8 @@ void UartDriver::install_hooks() {
       };
     }
     if (coe::Object* rx = rx_obj_[c]) {
-      auto previous = rx->hooks.before_read;
-      rx->hooks.before_read = [this, previous, c](coe::Object& o, int sub) {
+      auto previous = rx->hooks().before_read;
+      rx->edit_hooks().before_read = [this, previous, c](coe::Object& o, int sub) {
         if (previous) previous(o, sub);
         if (sub > 0) return;  // entries read what the last subindex-0 read delivered
         uint8_t bytes[255];

@@ -150,8 +150,8 @@ Rack::Rack(mdp::Device& device, RackOptions options)
   // 0xF380 summarises; the event masks 0x2000:09 / 0x2rr1:07 what 0xF386/0xF388 count).
   auto remask = [this](coe::Object* o) {
     if (o == nullptr) return;
-    auto previous = o->hooks.after_write;
-    o->hooks.after_write = [this, previous](coe::Object& obj, int sub) {
+    auto previous = o->hooks().after_write;
+    o->edit_hooks().after_write = [this, previous](coe::Object& obj, int sub) {
       if (previous) previous(obj, sub);
       tree_.update();
       dirty_ = false;

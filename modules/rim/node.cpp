@@ -24,7 +24,7 @@ RimNode::RimNode(const mdp::RackConfig& rack, uint8_t rim, CanBus& bus, RimNodeO
     control_module_.watch(kControlModuleNode, options.control_module_timeout_us);
   }
   // 0x1017 written over SDO changes the producer period at once (CiA 301 §7.5.2.32).
-  od_.find(0x1017)->hooks.after_write = [this](coe::Object& o, int) {
+  od_.find(0x1017)->edit_hooks().after_write = [this](coe::Object& o, int) {
     heartbeat_.set_period(static_cast<Micros>(o.get_u(0)) * 1000);
   };
 }

@@ -87,7 +87,8 @@ TEST_F(SdoTest, CompleteAccessWriteChecks) {
 
 TEST_F(SdoTest, CompleteAccessHookSeesTheWholeCandidateImage) {
   Object& a = *od.find(0x1C12);
-  a.hooks.validate_write = [](const Object&, int sub, std::span<const uint8_t> data, EsmState) {
+  a.edit_hooks().validate_write = [](const Object&, int sub, std::span<const uint8_t> data,
+                                     EsmState) {
     EXPECT_EQ(sub, -1);
     EXPECT_EQ(data.size(), 10u);  // the image from subindex 0, also for a write from 1
     return data[2] == 0x99 ? AbortCode::ParameterIncompatible : AbortCode::None;

@@ -38,9 +38,9 @@ TEST_F(SdoTest, RequestPathMakesNoHeapAllocation) {
   const Bytes repeat = requests.front();
   requests.push_back(repeat);  // the same bytes after other requests: a new request
   int hooked = 0;
-  od.find(0x2009)->hooks.validate_write = [](const Object&, int, std::span<const uint8_t>,
-                                             EsmState) { return AbortCode::None; };
-  od.find(0x2009)->hooks.after_write = [&hooked](Object&, int) { ++hooked; };
+  od.find(0x2009)->edit_hooks().validate_write = [](const Object&, int, std::span<const uint8_t>,
+                                                    EsmState) { return AbortCode::None; };
+  od.find(0x2009)->edit_hooks().after_write = [&hooked](Object&, int) { ++hooked; };
   Bytes reply(48);
   std::vector<size_t> lengths;
   lengths.reserve(requests.size() * 8);

@@ -153,6 +153,44 @@ TEST(ObjectDictionary, AddFinalizesAnUnfinalizedObject) {
   EXPECT_EQ(added.get_u(0), 0x1234u);
 }
 
+// Most objects of a device have no hooks: they hold none (one pointer, no three empty
+// std::function), so a slave's dictionary costs what its values need (issue 16: memory per
+// slave). An object is then one cache line.
+TEST(Object, WithoutHooksHoldsNoHookStorage) {
+  static_assert(sizeof(Object) <= 64);
+  Object o = test::var(0x2000, "v", DataType::Unsigned8, 8, access::kRw);
+  EXPECT_FALSE(o.hooks().before_read);
+  EXPECT_FALSE(o.hooks().validate_write);
+  EXPECT_FALSE(o.hooks().after_write);
+  int reads = 0;
+  o.edit_hooks().before_read = [&reads](Object&, int) { ++reads; };
+  EXPECT_TRUE(o.hooks().before_read);
+  EXPECT_FALSE(o.hooks().after_write);
+}
+
+// A copied dictionary (a device's defaults, the ESI's view) keeps each object's hooks, and the
+// copy's hooks are its own: replacing one side's leaves the other's alone.
+TEST(ObjectDictionary, CopyKeepsHooksOfItsOwn) {
+  ObjectDictionary od;
+  int original_reads = 0;
+  od.add(test::var(0x2000, "v", DataType::Unsigned8, 8, access::kRw))
+      .edit_hooks()
+      .before_read = [&original_reads](Object&, int) { ++original_reads; };
+  od.add(test::var(0x2001, "w", DataType::Unsigned8, 8, access::kRw));
+  ObjectDictionary copy = od;
+  Object& copied = *copy.find(0x2000);
+  ASSERT_TRUE(copied.hooks().before_read);
+  copied.hooks().before_read(copied, 0);
+  EXPECT_EQ(original_reads, 1);
+  int copy_reads = 0;
+  copied.edit_hooks().before_read = [&copy_reads](Object&, int) { ++copy_reads; };
+  Object& original = *od.find(0x2000);
+  original.hooks().before_read(original, 0);
+  EXPECT_EQ(original_reads, 2);
+  EXPECT_EQ(copy_reads, 0);
+  EXPECT_FALSE(copy.find(0x2001)->hooks().before_read);
+}
+
 }  // namespace
 }  // namespace rackcat::coe
 

@@ -41,12 +41,12 @@ TEST_F(ProcessImageTest, InputsFollowTheTxMappingWithBitsAndPadding) {
 
 TEST_F(ProcessImageTest, HooksRunOncePerCycle) {
   int reads = 0, writes = 0;
-  od.find(0x6000)->hooks.before_read = [&](Object& o, int sub) {
+  od.find(0x6000)->edit_hooks().before_read = [&](Object& o, int sub) {
     EXPECT_EQ(sub, ObjectHooks::kProcessData);
     o.set_u(4, 0x0102);
     ++reads;
   };
-  od.find(0x7000)->hooks.after_write = [&](Object&, int) { ++writes; };
+  od.find(0x7000)->edit_hooks().after_write = [&](Object&, int) { ++writes; };
   ASSERT_EQ(image.compile(), AbortCode::None);
   Bytes sm3(3), sm2(3);
   image.read_inputs(sm3);

@@ -169,7 +169,8 @@ TEST_F(SdoTest, AddressingAborts) {
 TEST_F(SdoTest, HooksValidateAndObserveWrites) {
   int after = 0;
   Object& o = *od.find(0x2009);
-  o.hooks.validate_write = [](const Object&, int sub, std::span<const uint8_t> data, EsmState) {
+  o.edit_hooks().validate_write = [](const Object&, int sub, std::span<const uint8_t> data,
+                                     EsmState) {
     EXPECT_EQ(sub, 0);
     if (data[0] == 0x42) return AbortCode::HardwareError;
     if (data[0] == 0x43) return AbortCode::LocalControl;
@@ -177,7 +178,7 @@ TEST_F(SdoTest, HooksValidateAndObserveWrites) {
     if (data[0] == 0x45) return AbortCode::GeneralError;
     return AbortCode::None;
   };
-  o.hooks.after_write = [&](Object&, int) { ++after; };
+  o.edit_hooks().after_write = [&](Object&, int) { ++after; };
   EXPECT_EQ(payload(sdo(download_expedited(0x2009, 0, 0x42, 1))),
             abort_payload(0x2009, 0, 0x06060000));
   EXPECT_EQ(payload(sdo(download_expedited(0x2009, 0, 0x43, 1))),
@@ -263,8 +264,8 @@ TEST_F(SdoTest, ValuesLargerThanTheStackScratchUseTheReservedBuffers) {
   EXPECT_EQ(r.get_u(2), 0x1234u);
   EXPECT_TRUE(std::equal(blob.rbegin(), blob.rend(), r.bytes(1).begin(), r.bytes(1).end()));
   // A refused value in the large candidate commits nothing.
-  od.find(0x5003)->hooks.validate_write = [](const Object&, int, std::span<const uint8_t>,
-                                             EsmState) { return AbortCode::ValueTooHigh; };
+  od.find(0x5003)->edit_hooks().validate_write = [](const Object&, int, std::span<const uint8_t>,
+                                                    EsmState) { return AbortCode::ValueTooHigh; };
   EXPECT_EQ(
       payload(sdo(download_normal(0x5003, 1, Bytes(5002, 0), true), EsmState::PreOp, kMailbox)),
       abort_payload(0x5003, 1, static_cast<uint32_t>(AbortCode::ValueTooHigh)));

@@ -122,7 +122,7 @@ TEST_F(SdoTest, ObjectsAddedWithoutPrepareAbortWithOutOfMemory) {
 
 TEST_F(SdoTest, BeforeReadHookRefreshesLiveValue) {
   int calls = 0;
-  od.find(0x1001)->hooks.before_read = [&](Object& o, int sub) {
+  od.find(0x1001)->edit_hooks().before_read = [&](Object& o, int sub) {
     ++calls;
     EXPECT_EQ(sub, 0);
     o.set_u(0, 0x81);

@@ -225,7 +225,7 @@ TEST_F(RackTest, NewMessagesAvailableReachesTheProcessData) {
   tx.set_u(0, 0);
   tx.set_u(1, 0x1BFF);
   tx.set_u(0, 1);
-  tx.hooks.after_write(tx, -1);
+  tx.hooks().after_write(tx, -1);
   go(EsmState::Init, EsmState::PreOp);
   go(EsmState::PreOp, EsmState::SafeOp);
   ASSERT_EQ(device.input_bytes(), 1u);

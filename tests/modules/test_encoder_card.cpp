@@ -67,12 +67,12 @@ class EncoderCard : public RackTest {
     uint8_t b[4];
     le::put32(b, value);
     const std::span<const uint8_t> data(b, o.entry(sub)->byte_length());
-    if (o.hooks.validate_write) {
-      const auto rc = o.hooks.validate_write(o, sub, data, EsmState::PreOp);
+    if (o.hooks().validate_write) {
+      const auto rc = o.hooks().validate_write(o, sub, data, EsmState::PreOp);
       if (rc != coe::AbortCode::None) return rc;
     }
     o.set_u(sub, value);
-    if (o.hooks.after_write) o.hooks.after_write(o, sub);
+    if (o.hooks().after_write) o.hooks().after_write(o, sub);
     return coe::AbortCode::None;
   }
   int ls = 0;

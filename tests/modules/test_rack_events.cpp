@@ -47,9 +47,9 @@ TEST_F(RackTest, UnplugAndReplugRimPropagatesAndLatchesUntilExceptionReset) {
   // 0xFBF1 through the dictionary's command hooks: latched bits whose cause is gone clear.
   coe::Object& reset = obj(0xFBF1);
   const uint8_t cmd[5] = {0x74, 0x65, 0x73, 0x65, 0x72};
-  ASSERT_EQ(reset.hooks.validate_write(reset, 1, cmd, EsmState::Op), coe::AbortCode::None);
+  ASSERT_EQ(reset.hooks().validate_write(reset, 1, cmd, EsmState::Op), coe::AbortCode::None);
   std::copy(cmd, cmd + 5, reset.bytes(1).begin());
-  reset.hooks.after_write(reset, 1);
+  reset.hooks().after_write(reset, 1);
   EXPECT_EQ(obj(kRim2Info).get_u(8), 0x2u);
   EXPECT_EQ(obj(0xF398).get_u(1), 0u);
   EXPECT_EQ(obj(0xF390).get_u(0), 0u);

@@ -30,7 +30,7 @@ class UartTest : public RackTest {
   // An SDO upload of subindex 0 of an Rx data object: the before_read hook refills it.
   std::string read_rx(size_t ch) {
     coe::Object& o = rx(ch);
-    o.hooks.before_read(o, 0);
+    o.hooks().before_read(o, 0);
     std::string s;
     for (uint8_t k = 1; k <= o.sub0(); ++k) s.push_back(static_cast<char>(o.get_u(k)));
     return s;
@@ -73,7 +73,7 @@ TEST_F(UartTest, RxOverflowAlmostFullAndFlush) {
   EXPECT_EQ(info().get_u(9), uart::kErrRxOverflow);
   // Flush (control bit 1) empties the FIFOs and clears the error details.
   info().set_u(1, 0x02);
-  info().hooks.after_write(info(), 1);
+  info().hooks().after_write(info(), 1);
   cycle();
   EXPECT_EQ(status_pdo(0), 0x8000);
   EXPECT_EQ(info().get_u(9), 0u);
@@ -104,7 +104,7 @@ TEST_F(UartTest, PseudoTerminalCarriesBytesBothWays) {
   t.set_u(1, 'a');
   t.set_u(2, 'b');
   t.set_u(3, 'c');
-  t.hooks.after_write(t, -1);
+  t.hooks().after_write(t, -1);
   std::string got;
   ASSERT_TRUE(eventually([&] {
     char buf[16];
@@ -121,7 +121,7 @@ TEST_F(UartTest, TransmitHoldKeepsBytesInTheTxFifo) {
   const int fd = ::open(uart().channel(0).path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
   ASSERT_GE(fd, 0);
   info().set_u(1, 0x01);  // transmit hold
-  info().hooks.after_write(info(), 1);
+  info().hooks().after_write(info(), 1);
   const uint8_t data[2] = {'h', 'i'};
   uart().transmit(0, data, 2);
   for (int i = 0; i < 20; ++i) {
@@ -130,7 +130,7 @@ TEST_F(UartTest, TransmitHoldKeepsBytesInTheTxFifo) {
   }
   EXPECT_EQ(uart().channel(0).tx.size(), 2u);
   info().set_u(1, 0x00);
-  info().hooks.after_write(info(), 1);
+  info().hooks().after_write(info(), 1);
   std::string got;
   ASSERT_TRUE(eventually([&] {
     char buf[8];
@@ -150,7 +150,7 @@ TEST_F(UartTest, ConfigurationIsAppliedToTheTerminal) {
   cfg.set_u(0x11, 1);
   cfg.set_u(0x12, 2);
   cfg.set_u(0x13, 1);
-  cfg.hooks.after_write(cfg, -1);
+  cfg.hooks().after_write(cfg, -1);
   const int fd = ::open(uart().channel(2).path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
   ASSERT_GE(fd, 0);
   termios tio{};
