@@ -22,7 +22,9 @@ std::vector<uint8_t> digest(uint8_t algorithm, const std::vector<uint8_t>& data)
   const EVP_MD* md = algorithm == cmd::kChecksumSha1 ? EVP_sha1() : EVP_md5();
   unsigned char out[EVP_MAX_MD_SIZE];
   unsigned int len = 0;
-  EVP_Digest(data.data(), data.size(), out, &len, md, nullptr);
+  // A digest libcrypto refuses (MD5 and SHA-1 are absent from a FIPS-only configuration):
+  // no checksum, and the command reports failure instead of an arbitrary value.
+  if (md == nullptr || EVP_Digest(data.data(), data.size(), out, &len, md, nullptr) != 1) return {};
   return std::vector<uint8_t>(out, out + len);
 }
 
@@ -141,7 +143,8 @@ ParameterWriter::Result ParameterWriter::execute(Job job, const Request& r) cons
       const bool stored =
           store_.load(r.fingerprint, payload, detail) == ParameterStore::LoadResult::Loaded;
       out.bytes = digest(r.algorithm, stored ? payload : r.payload);
-      out.ok = true;
+      out.ok = !out.bytes.empty();
+      if (!out.ok) out.report = "checksum algorithm not available from libcrypto";
       break;
     }
     case Job::Reset:

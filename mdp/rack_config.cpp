@@ -469,7 +469,11 @@ class Parser {
 std::string md5_base64(std::string_view text) {
   unsigned char md[EVP_MAX_MD_SIZE];
   unsigned int len = 0;
-  EVP_Digest(text.data(), text.size(), md, &len, EVP_md5(), nullptr);
+  // Without MD5 from libcrypto (a FIPS-only configuration) 0x2000:06 reads empty rather than
+  // a made-up fingerprint; `config_md5` in the file still sets it.
+  const EVP_MD* md5 = EVP_md5();
+  if (md5 == nullptr || EVP_Digest(text.data(), text.size(), md, &len, md5, nullptr) != 1)
+    return {};
   unsigned char b64[64] = {};
   const int n = EVP_EncodeBlock(b64, md, static_cast<int>(len));
   return std::string(reinterpret_cast<char*>(b64), static_cast<size_t>(n));
