@@ -38,7 +38,7 @@ answering a BRD (working counter = slave count), with RSS and thread count once 
     sudo scripts/op_bench.py [--build-dir build] [--slaves 1,16,64,128,199,256,1024]
         [--master auto|pysoem|ethercrab] [--ethercrab BIN]
         [--modes blocking,busy-poll] [--samples 10000] [--sdo-calls 2000]
-        [--brd-slaves 64,128,256,4096] [--firmware-yield-us N] [--cycle-us 0,1000] [--placement]
+        [--brd-slaves 64,128,256,4096] [--firmware-yield-us N] [--huge-heap auto|on|off] [--cycle-us 0,1000] [--placement]
 
 --guest-halt-poll-ns NS (diagnosis, in a KVM guest with the cpuidle-haltpoll driver): sets
 /sys/module/haltpoll/parameters/guest_halt_poll_ns for the run and restores it afterwards.
@@ -272,6 +272,8 @@ class Rackcat(wb.Responder):
             cmd.append("--busy-poll")
         if args.firmware_yield_us:
             cmd += ["--firmware-yield-us", str(args.firmware_yield_us)]
+        if args.huge_heap:
+            cmd += ["--huge-heap", args.huge_heap]
         super().__init__(name, cmd, tmp)
 
 
@@ -619,6 +621,8 @@ def main():
     ap.add_argument("--idle-seconds", type=float, default=5)
     ap.add_argument("--brd-slaves", default="64,128,256,4096",
                     help="slave counts for the start-up BRD / RSS / thread count run ('' = skip)")
+    ap.add_argument("--huge-heap", choices=["auto", "on", "off"], default=None,
+                    help="rackcat run --huge-heap (default: not given, rackcat's auto)")
     ap.add_argument("--firmware-yield-us", type=int, default=0,
                     help="rackcat run --firmware-yield-us (0 = off, rackcat's default)")
     ap.add_argument("--cycle-us", default="0",
