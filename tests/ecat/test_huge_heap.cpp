@@ -2,6 +2,7 @@
 // line built stays byte for byte, and where the kernel offers transparent huge pages the heap's
 // whole 2 MiB ranges are advised (and collapsed on Linux 6.1 and later).
 #include <cctype>
+#include <cerrno>
 #include <cstdint>
 #include <fstream>
 #include <memory>
@@ -15,9 +16,19 @@
 namespace rackcat::ecat {
 namespace {
 
-bool sanitized() {
+// ASan's allocator maps its own memory: malloc has no brk heap to advise. GCC says so with
+// __SANITIZE_ADDRESS__, clang with __has_feature.
 #if defined(__SANITIZE_ADDRESS__)
-  return true;  // ASan's allocator maps its own memory: malloc has no brk heap to advise
+#define RACKCAT_TEST_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define RACKCAT_TEST_ASAN 1
+#endif
+#endif
+
+bool sanitized() {
+#ifdef RACKCAT_TEST_ASAN
+  return true;
 #else
   return false;
 #endif
@@ -66,6 +77,7 @@ TEST(HugeHeap, KeepsTheHeapsContentAndAdvisesWholeRanges) {
   }
 
   const HugeHeapResult result = advise_huge_heap();
+  if (result.error == ENOENT) GTEST_SKIP() << "no [heap] mapping: malloc does not use brk here";
   EXPECT_EQ(result.error, 0);
   EXPECT_GE(result.advised_bytes, size_t{2} << 20);  // 12 MiB of heap holds whole ranges
   EXPECT_EQ(result.advised_bytes % (size_t{2} << 20), 0u);
