@@ -173,9 +173,8 @@ TEST(Object, WithoutHooksHoldsNoHookStorage) {
 TEST(ObjectDictionary, CopyKeepsHooksOfItsOwn) {
   ObjectDictionary od;
   int original_reads = 0;
-  od.add(test::var(0x2000, "v", DataType::Unsigned8, 8, access::kRw))
-      .edit_hooks()
-      .before_read = [&original_reads](Object&, int) { ++original_reads; };
+  od.add(test::var(0x2000, "v", DataType::Unsigned8, 8, access::kRw)).edit_hooks().before_read =
+      [&original_reads](Object&, int) { ++original_reads; };
   od.add(test::var(0x2001, "w", DataType::Unsigned8, 8, access::kRw));
   ObjectDictionary copy = od;
   Object& copied = *copy.find(0x2000);
