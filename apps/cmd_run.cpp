@@ -80,11 +80,11 @@ struct RunArgs {
 };
 
 // Lines from this size on put their heap in huge pages by default (--huge-heap auto): at 1,024
-// tiny racks a cycle took 28 % less back to back; at 199 and 256 no gain showed and the heap's
-// free holes cost 2-9 KiB per slave (docs/PERFORMANCE.md, session 18).
+// tiny racks a cycle took 5-10 % less on the wire and 10 % less in process; at 199 and 256 no
+// gain showed and the heap's free holes cost 2-9 KiB per slave (docs/PERFORMANCE.md, session 18).
 constexpr size_t kHugeHeapSlaves = 512;
 
-void advise_huge_heap(const std::string& mode, size_t slaves) {
+void heap_in_huge_pages(const std::string& mode, size_t slaves) {
   if (mode == "off" || (mode == "auto" && slaves < kHugeHeapSlaves)) return;
   const ecat::HugeHeapResult h = ecat::advise_huge_heap();
   if (h.advised_bytes != 0) {
@@ -342,7 +342,7 @@ int run(const RunArgs& a) {
   });
   std::fflush(stdout);
   if (!a.pcap.empty()) spdlog::info("rackcat: capturing to {}", a.pcap);
-  advise_huge_heap(a.huge_heap, line.size());
+  heap_in_huge_pages(a.huge_heap, line.size());
 
   const int rc = runner.run(segment);
   spdlog::info("rackcat: stopped; {} frames received, {} sent", runner.link().frames_received(),
