@@ -2,6 +2,10 @@
 
 #include <sys/mman.h>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -66,6 +70,15 @@ HugeHeapResult advise_huge_heap() {
   // the advised ranges in the background then.
   result.collapsed = madvise(start, length, kMadvCollapse) == 0;
   return result;
+}
+
+bool grow_heap_in_huge_page_steps() {
+#if defined(__GLIBC__)
+  // mallopt returns 1 on success, 0 on error (glibc manual, "Malloc Tunable Parameters").
+  return mallopt(M_TOP_PAD, static_cast<int>(kHugePage)) == 1;
+#else
+  return false;
+#endif
 }
 
 }  // namespace rackcat::ecat

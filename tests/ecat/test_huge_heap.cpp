@@ -1,8 +1,12 @@
-// A long line's heap in huge pages (ecat/host/huge_heap.*, rackcat run --huge-heap): what the
-// line built stays byte for byte, and where the kernel offers transparent huge pages the heap's
-// whole 2 MiB ranges are advised (and collapsed on Linux 6.1 and later).
+// A long line's heap (ecat/host/huge_heap.*): grown in 2 MiB steps while the line is built, and
+// with rackcat run --huge-heap in huge pages: what the line built stays byte for byte, and where
+// the kernel offers transparent huge pages the heap's whole 2 MiB ranges are advised (and
+// collapsed on Linux 6.1 and later).
+#include <unistd.h>
+
 #include <cctype>
 #include <cerrno>
+#include <cstddef>
 #include <cstdint>
 #include <fstream>
 #include <memory>
@@ -90,6 +94,25 @@ TEST(HugeHeap, KeepsTheHeapsContentAndAdvisesWholeRanges) {
       ASSERT_EQ(blocks[i][j], static_cast<uint8_t>(i * 7 + j)) << "block " << i << " byte " << j;
     }
   }
+}
+
+TEST(HugeHeap, GrowsTheHeapInTwoMiBSteps) {
+  if (sanitized()) GTEST_SKIP() << "ASan allocator: no malloc heap";
+#if !defined(__GLIBC__)
+  GTEST_SKIP() << "M_TOP_PAD is glibc's";
+#endif
+  ASSERT_TRUE(grow_heap_in_huge_page_steps());
+  // Small blocks until malloc extends the heap with brk: that one extension is 2 MiB or more
+  // (the default pads it by 128 KiB).
+  const auto* const before = static_cast<const uint8_t*>(sbrk(0));
+  std::vector<std::unique_ptr<uint8_t[]>> blocks;
+  constexpr size_t kMostBlocks = 64 * 1024;  // 64 MiB: far more than any top before the call
+  while (static_cast<const uint8_t*>(sbrk(0)) == before && blocks.size() < kMostBlocks) {
+    blocks.push_back(std::make_unique<uint8_t[]>(1024));
+  }
+  const auto* const after = static_cast<const uint8_t*>(sbrk(0));
+  if (after == before) GTEST_SKIP() << "malloc does not use brk here";
+  EXPECT_GE(after - before, ptrdiff_t{2} << 20);
 }
 
 }  // namespace
