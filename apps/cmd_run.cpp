@@ -82,6 +82,8 @@ struct RunArgs {
 // Lines from this size on put their heap in huge pages by default (--huge-heap auto): at 1,024
 // tiny racks a cycle took 5-10 % less on the wire and 10 % less in process; at 199 and 256 no
 // gain showed and the heap's free holes cost 2-9 KiB per slave (docs/PERFORMANCE.md, session 18).
+// Since the heap grows in 2 MiB steps (grow_heap_in_huge_page_steps) the gain on the wire at
+// 1,024 is 0-5 % for 0.4-0.5 MiB (session 19).
 constexpr size_t kHugeHeapSlaves = 512;
 
 void heap_in_huge_pages(const std::string& mode, size_t slaves) {

@@ -5,7 +5,8 @@
 // tiny rack) is allocated once at start-up from malloc's main heap, in 4 KiB pages. Each cycle's
 // round touches a few lines in several of those pages per slave, so at 1,024 slaves it needs
 // far more page translations than the TLB holds (docs/PERFORMANCE.md, session 18: in process
-// 100 -> 89-93 us a cycle, on the wire back to back 116-124 -> 105-117 us). Once the line is
+// 100 -> 89-93 us a cycle, on the wire back to back 116-124 -> 105-117 us; 0-5 % on the wire
+// once the heap grows in 2 MiB steps, session 19, grow_heap_in_huge_page_steps). Once the line is
 // built, the heap's whole 2 MiB ranges are advised MADV_HUGEPAGE and collapsed into huge pages
 // (MADV_COLLAPSE, Linux 6.1; older kernels leave the collapse to khugepaged). Contents do not
 // change; the free holes inside those ranges become resident, which is why small lines (where
