@@ -212,15 +212,24 @@ class RackLine {
   segment.after_frame();
 }
 
+// N tiny racks in OP with the firmware deferred as the event loop runs it; nullptr (and the
+// benchmark skipped with the reason) when the test master could not bring them there.
+std::unique_ptr<RackLine> line_in_op(benchmark::State& state, size_t n) {
+  auto line = std::make_unique<RackLine>(n);
+  if (const std::string failed = line->to_op(); !failed.empty()) {
+    state.SkipWithError(failed.c_str());
+    return nullptr;
+  }
+  line->segment().set_deferred_firmware(true);
+  return line;
+}
+
 void run(benchmark::State& state, bool changing) {
   const auto n = static_cast<size_t>(state.range(0));
   const bool dc = state.range(1) != 0;
-  RackLine line(n);
-  if (const std::string failed = line.to_op(); !failed.empty()) {
-    state.SkipWithError(failed.c_str());
-    return;
-  }
-  line.segment().set_deferred_firmware(true);
+  const std::unique_ptr<RackLine> in_op = line_in_op(state, n);
+  if (!in_op) return;
+  RackLine& line = *in_op;
   const std::vector<std::vector<uint8_t>> cycles[2] = {line.cycle(0x5A, dc),
                                                        line.cycle(changing ? 0xA5 : 0x5A, dc)};
   std::vector<std::vector<uint8_t>> work = cycles[0];
@@ -241,12 +250,9 @@ void run(benchmark::State& state, bool changing) {
 // round done (docs/PERFORMANCE.md: paced at 1 ms the reply is the frames' pass alone).
 void BM_RackLinePass(benchmark::State& state) {
   const auto n = static_cast<size_t>(state.range(0));
-  RackLine line(n);
-  if (const std::string failed = line.to_op(); !failed.empty()) {
-    state.SkipWithError(failed.c_str());
-    return;
-  }
-  line.segment().set_deferred_firmware(true);
+  const std::unique_ptr<RackLine> in_op = line_in_op(state, n);
+  if (!in_op) return;
+  RackLine& line = *in_op;
   const std::vector<std::vector<uint8_t>> frames = line.cycle(0x5A, false);
   std::vector<std::vector<uint8_t>> work = frames;
   for (auto _ : state) {
@@ -280,12 +286,9 @@ void BM_RackLineCycleSteady(benchmark::State& state) {
 // One master cycle of LWR + LRD (two frames, each followed by its round), the outputs repeated.
 void BM_RackLineLwrLrdSteady(benchmark::State& state) {
   const auto n = static_cast<size_t>(state.range(0));
-  RackLine line(n);
-  if (const std::string failed = line.to_op(); !failed.empty()) {
-    state.SkipWithError(failed.c_str());
-    return;
-  }
-  line.segment().set_deferred_firmware(true);
+  const std::unique_ptr<RackLine> in_op = line_in_op(state, n);
+  if (!in_op) return;
+  RackLine& line = *in_op;
   const std::vector<std::vector<uint8_t>> frames = line.split_frames(0x5A);
   std::vector<std::vector<uint8_t>> work = frames;
   for (auto _ : state) {
